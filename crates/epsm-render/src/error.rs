@@ -1,0 +1,72 @@
+//! Typed, located errors.
+
+use std::path::PathBuf;
+
+/// An error in a scene or problem file, naming the file, the field and what
+/// was expected. `field` is a dotted path such as `objects[2].material` or
+/// `camera.fov`; `line` is 1-based when the parser knows it.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{}{}: {field}: {message}", file.display(), line.map(|l| format!(":{l}")).unwrap_or_default())]
+pub struct SceneError {
+    /// The file the error is in.
+    pub file: PathBuf,
+    /// 1-based line, when known.
+    pub line: Option<usize>,
+    /// Dotted path of the offending field.
+    pub field: String,
+    /// What was wrong and what was expected.
+    pub message: String,
+}
+
+impl SceneError {
+    /// A new error for `field` of `file`.
+    pub fn new(
+        file: impl Into<PathBuf>,
+        field: impl Into<String>,
+        message: impl Into<String>,
+    ) -> Self {
+        Self {
+            file: file.into(),
+            line: None,
+            field: field.into(),
+            message: message.into(),
+        }
+    }
+
+    /// The same error at a 1-based line.
+    pub fn at_line(mut self, line: usize) -> Self {
+        self.line = Some(line);
+        self
+    }
+}
+
+/// Errors of this crate.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// A scene file (or a file it references) is malformed.
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    /// Reading or writing a file failed.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The underlying error.
+        source: std::io::Error,
+    },
+    /// An image could not be decoded or encoded.
+    #[error("{}: {message}", path.display())]
+    Image {
+        /// The file.
+        path: PathBuf,
+        /// What went wrong.
+        message: String,
+    },
+    /// A request that does not fit the scene (an object index out of range, a
+    /// sample outside the image, ...).
+    #[error("invalid request: {0}")]
+    Invalid(String),
+}
+
+/// Result with this crate's [`Error`].
+pub type Result<T, E = Error> = std::result::Result<T, E>;

@@ -1,0 +1,221 @@
+//! The scene model: camera, materials, objects (meshes with transforms),
+//! lights, background and render settings, plus the acceleration structure
+//! and light tables derived from them.
+//!
+//! Geometry that is differentiated (transforms, light positions, the camera)
+//! is stored in `f64`; render-time structures derived from it are `f32`.
+//! Moving one object with [`Scene::set_object_transform`] refits only the top
+//! level of the BVH and that object's emitter table.
+
+pub mod mesh;
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use glam::{DAffine3, DVec3, Vec3};
+
+pub use mesh::Mesh;
+
+use crate::bvh::Accel;
+use crate::camera::Camera;
+use crate::lights::{Background, LightTable, PointLight};
+use crate::materials::Material;
+
+/// Index of a material in [`Scene::materials`].
+pub type MaterialId = u32;
+/// Index of an object in [`Scene::objects`].
+pub type ObjectId = u32;
+
+/// One object: a mesh placed in the world with a material, optionally
+/// emissive (an area light).
+#[derive(Clone, Debug)]
+pub struct Object {
+    /// Unique name; parameters bind to it (`"<name>.<field>"`).
+    pub name: String,
+    /// The mesh, object space.
+    pub mesh: Arc<Mesh>,
+    /// Object → world transform (any invertible affine map).
+    pub world_from_object: DAffine3,
+    /// The material.
+    pub material: MaterialId,
+    /// Emitted radiance from the front face (the side of the geometric normal);
+    /// `None` for non-emitters.
+    pub emission: Option<Vec3>,
+}
+
+/// Render settings.
+///
+/// | key | unit | default | range |
+/// |---|---|---|---|
+/// | `spp` | samples per pixel | 16 | ≥ 1 |
+/// | `max_depth` | path vertices after the camera | 8 | ≥ 1 |
+/// | `rr_depth` | depth from which Russian roulette runs | 3 | ≥ 1 |
+/// | `seed` | — | 0 | any `u64`... stored as `u32` |
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RenderSettings {
+    /// Samples per pixel.
+    pub spp: u32,
+    /// Maximum number of surface interactions on a path.
+    pub max_depth: u32,
+    /// Depth at which Russian roulette starts.
+    pub rr_depth: u32,
+    /// Seed of the random streams.
+    pub seed: u32,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        Self {
+            spp: 16,
+            max_depth: 8,
+            rr_depth: 3,
+            seed: 0,
+        }
+    }
+}
+
+/// Everything a scene is made of, before derived structures are built.
+#[derive(Clone, Debug)]
+pub struct SceneParts {
+    /// The camera.
+    pub camera: Camera,
+    /// Materials; objects refer to them by index.
+    pub materials: Vec<Material>,
+    /// Objects.
+    pub objects: Vec<Object>,
+    /// Point lights.
+    pub point_lights: Vec<PointLight>,
+    /// What rays that leave the scene see.
+    pub background: Background,
+    /// Render settings.
+    pub settings: RenderSettings,
+    /// The file the scene came from (for messages), if any.
+    pub source: Option<PathBuf>,
+}
+
+/// A scene ready to render: its parts plus the BVH and the light tables.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    parts: SceneParts,
+    accel: Accel,
+    lights: LightTable,
+}
+
+impl Scene {
+    /// Builds the BVHs and light tables.
+    pub fn new(parts: SceneParts) -> crate::error::Result<Self> {
+        let accel = Accel::build(&parts.objects);
+        let lights = LightTable::build(&parts.objects, &parts.point_lights, &parts.background);
+        Ok(Self {
+            parts,
+            accel,
+            lights,
+        })
+    }
+
+    /// The camera.
+    pub fn camera(&self) -> &Camera {
+        &self.parts.camera
+    }
+    /// Replaces the camera.
+    pub fn set_camera(&mut self, camera: Camera) {
+        self.parts.camera = camera;
+    }
+    /// The materials.
+    pub fn materials(&self) -> &[Material] {
+        &self.parts.materials
+    }
+    /// Mutable materials (colour parameters change them in place).
+    pub fn materials_mut(&mut self) -> &mut [Material] {
+        &mut self.parts.materials
+    }
+    /// The objects.
+    pub fn objects(&self) -> &[Object] {
+        &self.parts.objects
+    }
+    /// The point lights.
+    pub fn point_lights(&self) -> &[PointLight] {
+        &self.parts.point_lights
+    }
+    /// The background.
+    pub fn background(&self) -> &Background {
+        &self.parts.background
+    }
+    /// Render settings.
+    pub fn settings(&self) -> &RenderSettings {
+        &self.parts.settings
+    }
+    /// Mutable render settings.
+    pub fn settings_mut(&mut self) -> &mut RenderSettings {
+        &mut self.parts.settings
+    }
+    /// The file the scene came from.
+    pub fn source(&self) -> Option<&std::path::Path> {
+        self.parts.source.as_deref()
+    }
+    /// The acceleration structure.
+    pub fn accel(&self) -> &Accel {
+        &self.accel
+    }
+    /// The light tables (selection and sampling of every emitter).
+    pub fn lights(&self) -> &LightTable {
+        &self.lights
+    }
+
+    /// The index of the object called `name`.
+    pub fn object_id(&self, name: &str) -> Option<ObjectId> {
+        self.parts
+            .objects
+            .iter()
+            .position(|o| o.name == name)
+            .map(|i| i as ObjectId)
+    }
+
+    /// Moves object `id`: refits the top level of the BVH and rebuilds the
+    /// light table (cheap: proportional to emissive triangles), without
+    /// rebuilding any other object's BVH.
+    pub fn set_object_transform(&mut self, id: ObjectId, world_from_object: DAffine3) {
+        self.parts.objects[id as usize].world_from_object = world_from_object;
+        self.accel.update_instance(&self.parts.objects, id);
+        if self.parts.objects[id as usize].emission.is_some() {
+            self.rebuild_lights();
+        }
+    }
+
+    /// Sets emission radiance of object `id` (rebuilds the light table).
+    pub fn set_object_emission(&mut self, id: ObjectId, emission: Option<Vec3>) {
+        self.parts.objects[id as usize].emission = emission;
+        self.rebuild_lights();
+    }
+
+    /// Moves point light `index` (rebuilds the light table).
+    pub fn set_point_light(&mut self, index: usize, light: PointLight) {
+        self.parts.point_lights[index] = light;
+        self.rebuild_lights();
+    }
+
+    /// A world-space bounding sphere radius of the scene's geometry (used for
+    /// scene-relative tolerances and environment-light sampling).
+    pub fn radius(&self) -> f64 {
+        self.accel
+            .world_bounds()
+            .map(|(lo, hi)| 0.5 * (hi - lo).length())
+            .unwrap_or(1.0)
+    }
+
+    /// World-space centre of the scene's bounds.
+    pub fn center(&self) -> DVec3 {
+        self.accel
+            .world_bounds()
+            .map(|(lo, hi)| 0.5 * (hi + lo))
+            .unwrap_or(DVec3::ZERO)
+    }
+
+    fn rebuild_lights(&mut self) {
+        self.lights = LightTable::build(
+            &self.parts.objects,
+            &self.parts.point_lights,
+            &self.parts.background,
+        );
+    }
+}
