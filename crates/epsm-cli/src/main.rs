@@ -1,1 +1,44 @@
-fn main() {}
+//! `epsm`: the command-line front end of the epsm differentiable renderer.
+//!
+//! Every command is documented in `docs/cli.md`; `epsm <command> --help`
+//! prints the same flags.
+
+mod cmd;
+mod progress;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+/// epsm — a CPU, pure-Rust, physically based differentiable renderer
+/// (extended path space manifolds + optimal-transport loss).
+#[derive(Parser, Debug)]
+#[command(name = "epsm", version, about, long_about = None, propagate_version = true)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Render a scene file to an EXR (linear) or PNG (sRGB) image.
+    Render(cmd::render::RenderArgs),
+    /// Measure performance (renderer, BVH, matching) and print the numbers.
+    #[command(subcommand)]
+    Bench(cmd::bench::BenchCommand),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match &cli.command {
+        Command::Render(args) => cmd::render::run(args),
+        Command::Bench(b) => cmd::bench::run(b),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(err) => {
+            eprintln!("error: {err:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -28,7 +28,12 @@ impl PixelSampler {
     /// index, e.g. `y·width + x`) under `seed`.
     #[inline]
     pub fn new(seed: u32, pixel: u32, sample: u32, spp: u32) -> Self {
-        Self { key: mix64(((seed as u64) << 32) | pixel as u64), sample, spp: spp.max(1), dim: 0 }
+        Self {
+            key: mix64(((seed as u64) << 32) | pixel as u64),
+            sample,
+            spp: spp.max(1),
+            dim: 0,
+        }
     }
 
     /// Jumps to dimension `dim` (paths give each bounce a fixed block of
@@ -44,7 +49,8 @@ impl PixelSampler {
         let h = mix64(self.key ^ (self.dim as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
         self.dim += 1;
         let stratum = permute(self.sample, self.spp, h as u32);
-        let jitter = to_unit((h >> 32) as u32 ^ hash32(self.sample.wrapping_mul(0x2C1B_3C6D) ^ h as u32));
+        let jitter =
+            to_unit((h >> 32) as u32 ^ hash32(self.sample.wrapping_mul(0x2C1B_3C6D) ^ h as u32));
         ((stratum as f32 + jitter) / self.spp as f32).min(ONE_MINUS_EPSILON)
     }
 

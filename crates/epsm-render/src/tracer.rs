@@ -20,7 +20,9 @@ use crate::frame::Frame;
 use crate::hit::SurfacePoint;
 use crate::materials::VertexKind;
 use crate::ray::{Ray, offset_origin};
-use crate::record::{ConnectionRecord, OccluderRecord, PathRecord, RecordLevel, TrianglePoint, VertexRecord};
+use crate::record::{
+    ConnectionRecord, OccluderRecord, PathRecord, RecordLevel, TrianglePoint, VertexRecord,
+};
 use crate::sampler::PixelSampler;
 use crate::scene::Scene;
 
@@ -48,7 +50,12 @@ impl RenderOptions {
     /// The scene's own settings.
     pub fn from_scene(scene: &Scene) -> Self {
         let s = scene.settings();
-        Self { spp: s.spp, seed: s.seed, max_depth: s.max_depth, rr_depth: s.rr_depth }
+        Self {
+            spp: s.spp,
+            seed: s.seed,
+            max_depth: s.max_depth,
+            rr_depth: s.rr_depth,
+        }
     }
 }
 
@@ -100,7 +107,11 @@ pub struct PixelSample {
 
 /// Renders the scene. `progress` is called (from worker threads) with the
 /// number of pixel samples each finished tile traced.
-pub fn render(scene: &Scene, opts: &RenderOptions, progress: &(dyn Fn(u64) + Sync)) -> RenderOutput {
+pub fn render(
+    scene: &Scene,
+    opts: &RenderOptions,
+    progress: &(dyn Fn(u64) + Sync),
+) -> RenderOutput {
     render_tiles(scene, opts, None, progress).0
 }
 
@@ -118,13 +129,25 @@ pub fn render_recorded(
 
 /// Traces the given pixel samples (with the random streams of a render with
 /// `opts`) and returns their records in the same order.
-pub fn trace_samples(scene: &Scene, opts: &RenderOptions, samples: &[PixelSample], level: RecordLevel) -> Vec<PathRecord> {
+pub fn trace_samples(
+    scene: &Scene,
+    opts: &RenderOptions,
+    samples: &[PixelSample],
+    level: RecordLevel,
+) -> Vec<PathRecord> {
     samples
         .par_iter()
         .map(|s| {
             let mut counters = TraceCounters::default();
             let mut rec = PathRecord::default();
-            trace_pixel_sample(scene, opts, s.pixel, s.sample, Some((level, &mut rec)), &mut counters);
+            trace_pixel_sample(
+                scene,
+                opts,
+                s.pixel,
+                s.sample,
+                Some((level, &mut rec)),
+                &mut counters,
+            );
             rec
         })
         .collect()
@@ -162,7 +185,15 @@ fn render_tiles(
         records = all;
     }
     let samples = w as u64 * h as u64 * opts.spp as u64;
-    (RenderOutput { image, samples, seconds: start.elapsed().as_secs_f64(), counters }, records)
+    (
+        RenderOutput {
+            image,
+            samples,
+            seconds: start.elapsed().as_secs_f64(),
+            counters,
+        },
+        records,
+    )
 }
 
 struct TileOutput {
@@ -171,9 +202,18 @@ struct TileOutput {
     counters: TraceCounters,
 }
 
-fn render_tile(scene: &Scene, opts: &RenderOptions, level: Option<RecordLevel>, tile: UVec2) -> TileOutput {
+fn render_tile(
+    scene: &Scene,
+    opts: &RenderOptions,
+    level: Option<RecordLevel>,
+    tile: UVec2,
+) -> TileOutput {
     let (w, h) = (scene.camera().width, scene.camera().height);
-    let mut out = TileOutput { pixels: Vec::new(), records: Vec::new(), counters: TraceCounters::default() };
+    let mut out = TileOutput {
+        pixels: Vec::new(),
+        records: Vec::new(),
+        counters: TraceCounters::default(),
+    };
     for y in tile.y * TILE..((tile.y + 1) * TILE).min(h) {
         for x in tile.x * TILE..((tile.x + 1) * TILE).min(w) {
             let pixel = UVec2::new(x, y);
@@ -182,7 +222,14 @@ fn render_tile(scene: &Scene, opts: &RenderOptions, level: Option<RecordLevel>, 
                 let l = match level {
                     Some(level) => {
                         let mut rec = PathRecord::default();
-                        let l = trace_pixel_sample(scene, opts, pixel, s, Some((level, &mut rec)), &mut out.counters);
+                        let l = trace_pixel_sample(
+                            scene,
+                            opts,
+                            pixel,
+                            s,
+                            Some((level, &mut rec)),
+                            &mut out.counters,
+                        );
                         out.records.push(rec);
                         l
                     }
@@ -211,8 +258,17 @@ fn trace_pixel_sample(
     let film = pixel.as_vec2() + sampler.next_2d();
     let ray = cam.ray(film);
     let mut rec = record.map(|(level, rec)| {
-        *rec = PathRecord { pixel, sample, film, ..PathRecord::default() };
-        Recording { level, rec, done: false }
+        *rec = PathRecord {
+            pixel,
+            sample,
+            film,
+            ..PathRecord::default()
+        };
+        Recording {
+            level,
+            rec,
+            done: false,
+        }
     });
     let l = trace_path(scene, opts, ray, &mut sampler, rec.as_mut(), counters);
     let l = if l.is_finite() {
@@ -288,7 +344,10 @@ fn trace_path(
             && sp.ng.dot(wi_world) > 0.0
         {
             let w = prev.map_or(1.0, |(p_prev, pdf)| {
-                mis(pdf, lights.pdf_area(hit.object, hit.triangle, p_prev, sp.p, sp.ng))
+                mis(
+                    pdf,
+                    lights.pdf_area(hit.object, hit.triangle, p_prev, sp.p, sp.ng),
+                )
             });
             contribution += beta * le * w;
         }
@@ -308,7 +367,11 @@ fn trace_path(
             let f = material.eval(wi, wo, sp.uv);
             let same_side = ls.wo.dot(sp.ng) * wi_world.dot(sp.ng) > 0.0;
             if f != Vec3::ZERO && same_side && ls.pdf > 0.0 {
-                let w = if ls.delta { 1.0 } else { mis(ls.pdf, material.pdf(wi, wo, sp.uv)) };
+                let w = if ls.delta {
+                    1.0
+                } else {
+                    mis(ls.pdf, material.pdf(wi, wo, sp.uv))
+                };
                 let unoccluded = beta * f * ls.radiance * (w / ls.pdf);
                 let shadow = shadow_ray(&sp, ls.wo, ls.position, ls.dist);
                 counters.shadow_rays += 1;
@@ -316,7 +379,10 @@ fn trace_path(
                 if !blocked {
                     contribution += unoccluded;
                 }
-                if let Some(r) = rec.as_deref().filter(|r| !r.done && r.level >= RecordLevel::FirstDiffuse) {
+                if let Some(r) = rec
+                    .as_deref()
+                    .filter(|r| !r.done && r.level >= RecordLevel::FirstDiffuse)
+                {
                     let occluder = blocked.then(|| first_occluder(scene, &shadow)).flatten();
                     connection = Some(ConnectionRecord {
                         vertex: r.rec.vertices.len() as u32,
@@ -349,9 +415,27 @@ fn trace_path(
         }
 
         if let Some(r) = rec.as_deref_mut().filter(|r| !r.done) {
-            let at = TrianglePoint { object: hit.object, triangle: hit.triangle, b1: hit.b1, b2: hit.b2 };
-            let (lobe, eta, m) = next.map_or((None, 1.0, sp.ns), |(bs, _)| (Some(bs.lobe), bs.eta, frame.to_world(bs.m)));
-            r.rec.vertices.push(VertexRecord { at, p: sp.p, ng: sp.ng, ns: sp.ns, kind, lobe, eta, m, throughput: beta, contribution });
+            let at = TrianglePoint {
+                object: hit.object,
+                triangle: hit.triangle,
+                b1: hit.b1,
+                b2: hit.b2,
+            };
+            let (lobe, eta, m) = next.map_or((None, 1.0, sp.ns), |(bs, _)| {
+                (Some(bs.lobe), bs.eta, frame.to_world(bs.m))
+            });
+            r.rec.vertices.push(VertexRecord {
+                at,
+                p: sp.p,
+                ng: sp.ng,
+                ns: sp.ns,
+                kind,
+                lobe,
+                eta,
+                m,
+                throughput: beta,
+                contribution,
+            });
             r.rec.connections.extend(connection);
             r.done = match r.level {
                 RecordLevel::Primary => true,
@@ -366,7 +450,11 @@ fn trace_path(
             eta_scale *= bs.eta * bs.eta;
         }
         prev = Some((sp.p, bs.pdf)).filter(|_| !bs.lobe.is_delta());
-        let side = if wo_world.dot(sp.ng) >= 0.0 { sp.ng } else { -sp.ng };
+        let side = if wo_world.dot(sp.ng) >= 0.0 {
+            sp.ng
+        } else {
+            -sp.ng
+        };
         ray = Ray::new(offset_origin(sp.p, side), wo_world);
 
         // Russian roulette on the throughput with radiance scaling undone.
@@ -390,7 +478,12 @@ fn shadow_ray(sp: &SurfacePoint, wo: Vec3, y: Vec3, dist: f32) -> Ray {
     let side = if wo.dot(sp.ng) >= 0.0 { sp.ng } else { -sp.ng };
     let origin = offset_origin(sp.p, side);
     if dist.is_finite() {
-        Ray { origin, dir: y - origin, t_min: 0.0, t_max: 1.0 - SHADOW_EPS }
+        Ray {
+            origin,
+            dir: y - origin,
+            t_min: 0.0,
+            t_max: 1.0 - SHADOW_EPS,
+        }
     } else {
         Ray::new(origin, wo)
     }
@@ -399,5 +492,13 @@ fn shadow_ray(sp: &SurfacePoint, wo: Vec3, y: Vec3, dist: f32) -> Ray {
 fn first_occluder(scene: &Scene, shadow: &Ray) -> Option<OccluderRecord> {
     let hit = scene.accel().closest_hit(shadow)?;
     let sp = scene.accel().surface_point(scene.objects(), &hit);
-    Some(OccluderRecord { at: TrianglePoint { object: hit.object, triangle: hit.triangle, b1: hit.b1, b2: hit.b2 }, p: sp.p })
+    Some(OccluderRecord {
+        at: TrianglePoint {
+            object: hit.object,
+            triangle: hit.triangle,
+            b1: hit.b1,
+            b2: hit.b2,
+        },
+        p: sp.p,
+    })
 }
