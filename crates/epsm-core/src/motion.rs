@@ -9,7 +9,7 @@
 
 use epsm_render::scene::ObjectId;
 use glam::{DAffine3, DMat3, DVec3};
-use nalgebra::{Matrix3, RealField, Rotation3, Vector3};
+use nalgebra::{Matrix3, RealField, Vector3};
 use num_dual::Dual64;
 
 use crate::params::{ParamTable, Target};
@@ -113,6 +113,27 @@ fn c<T: RealField>(x: f64) -> T {
     nalgebra::convert(x)
 }
 
+/// The rotation by `angle` (radians) about the unit `axis`, Rodrigues'
+/// formula `cos I + sin [k]× + (1 − cos) k kᵀ`. (nalgebra's
+/// `Rotation3::from_axis_angle` returns the identity for a zero angle and so
+/// loses a dual number's derivative there.)
+pub(crate) fn rotation<T: RealField + Copy>(axis: DVec3, angle: T) -> Matrix3<T> {
+    let k = na(axis).map(c::<T>);
+    let (sin, cos) = (angle.sin(), angle.cos());
+    let cross = Matrix3::new(
+        T::zero(),
+        -k[2],
+        k[1],
+        k[2],
+        T::zero(),
+        -k[0],
+        -k[1],
+        k[0],
+        T::zero(),
+    );
+    Matrix3::identity() * cos + cross * sin + k * k.transpose() * (T::one() - cos)
+}
+
 fn na(v: DVec3) -> Vector3<f64> {
     Vector3::new(v.x, v.y, v.z)
 }
@@ -124,10 +145,10 @@ fn place<T: RealField + Copy>(
     o: &Offsets<T>,
 ) -> (Matrix3<T>, Vector3<T>) {
     let deg = c::<T>(std::f64::consts::PI / 180.0);
-    let r = Rotation3::from_axis_angle(&Vector3::z_axis(), o.rotate_deg[2] * deg)
-        * Rotation3::from_axis_angle(&Vector3::y_axis(), o.rotate_deg[1] * deg)
-        * Rotation3::from_axis_angle(&Vector3::x_axis(), o.rotate_deg[0] * deg);
-    let rs = r.matrix() * o.scale;
+    let r = rotation(DVec3::Z, o.rotate_deg[2] * deg)
+        * rotation(DVec3::Y, o.rotate_deg[1] * deg)
+        * rotation(DVec3::X, o.rotate_deg[0] * deg);
+    let rs = r * o.scale;
     let m = file.matrix3;
     let file_linear = Matrix3::from_fn(|i, j| c::<T>(m.col(j)[i]));
     let pivot_t = na(pivot).map(c::<T>);

@@ -10,7 +10,9 @@
 
 use epsm_render::Camera;
 use glam::{DVec2, DVec3};
-use nalgebra::{RealField, Rotation3, Unit, Vector3};
+use nalgebra::{RealField, Vector3};
+
+use crate::motion::rotation;
 use num_dual::Dual64;
 
 /// Camera eye and orthonormal basis in scalar type `T`, with the film
@@ -53,9 +55,7 @@ impl<T: RealField + Copy> Pose<T> {
     /// The pose of `base` moved by `o`.
     pub fn driven(base: &Camera, o: &CameraOffsets<T>) -> Self {
         let deg: T = nalgebra::convert(std::f64::consts::PI / 180.0);
-        let pitch_axis = Unit::new_unchecked(v3::<T>(base.right));
-        let r = Rotation3::from_axis_angle(&Vector3::y_axis(), o.yaw_deg * deg)
-            * Rotation3::from_axis_angle(&pitch_axis, o.pitch_deg * deg);
+        let r = rotation(DVec3::Y, o.yaw_deg * deg) * rotation(base.right, o.pitch_deg * deg);
         let th = (0.5 * base.fov_y).tan();
         let (w, h) = (f64::from(base.width), f64::from(base.height));
         Self {
