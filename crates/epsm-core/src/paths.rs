@@ -18,7 +18,7 @@
 
 use epsm_render::Scene;
 use epsm_render::lights::LightPoint;
-use epsm_render::materials::{Lobe, VertexKind};
+use epsm_render::materials::{Bsdf, Lobe, VertexKind};
 use epsm_render::record::{ConnectionRecord, PathRecord, TrianglePoint};
 use glam::{DVec2, UVec2, Vec3};
 
@@ -297,6 +297,27 @@ fn light(scene: &Scene, motion: &Motion, c: &ConnectionRecord) -> Result<Node, D
     }
 }
 
+/// The relative IOR of a refraction in `f64`: the record's `f32` value
+/// snapped to the material's `ior` or `1/ior`, whichever it rounds from.
+fn exact_eta(scene: &Scene, at: &TrianglePoint, recorded: f32) -> f64 {
+    let material = scene
+        .objects()
+        .get(at.object as usize)
+        .and_then(|o| scene.materials().get(o.material as usize));
+    let recorded = f64::from(recorded);
+    match material.map(|m| &m.bsdf) {
+        Some(Bsdf::Dielectric(d)) => {
+            let ior = f64::from(d.ior);
+            if (recorded - ior).abs() <= (recorded - 1.0 / ior).abs() {
+                ior
+            } else {
+                1.0 / ior
+            }
+        }
+        _ => recorded,
+    }
+}
+
 /// Builds one path: `verts` are the record's unknown vertices (all but the
 /// first diffuse one are S; for a shadow, just D), `end` the fixed end.
 fn build(
@@ -378,7 +399,7 @@ fn build(
                 ),
             },
             (_, _, Some(Lobe::SpecularTransmission)) => ConstraintKind::Specular {
-                eta: f64::from(v[i].eta),
+                eta: exact_eta(scene, &v[i].at, v[i].eta),
                 transmit: true,
             },
             (_, _, Some(Lobe::SpecularReflection)) => ConstraintKind::Specular {

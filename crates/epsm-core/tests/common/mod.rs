@@ -3,11 +3,13 @@
 //! Newton and stress tests.
 #![allow(dead_code)]
 
+pub mod manual;
 pub mod synth;
 
 use epsm_core::check::{CheckReport, CheckSettings, check_path};
 use epsm_core::{ParamTable, PathKind, classify};
 
+#[allow(unused_imports)]
 pub use synth::{End, Rng, Spec, Synth, Vertex, build};
 
 /// Classifies a synthetic configuration and checks its paths of `kind`.
