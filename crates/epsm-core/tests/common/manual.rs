@@ -29,7 +29,8 @@ pub struct Manual {
 }
 
 impl Manual {
-    /// Adds an object; returns its id.
+    /// Adds an object; returns its id. Normals are stored as given (the
+    /// interpolated normal is normalised after interpolation).
     pub fn object(
         &mut self,
         triangles: &[[DVec3; 3]],
@@ -51,10 +52,7 @@ impl Manual {
         });
         let positions = triangles.iter().flatten().map(|p| p.as_vec3()).collect();
         let normals = normals.map_or(Vec::new(), |n| {
-            n.iter()
-                .flatten()
-                .map(|v| v.normalize().as_vec3())
-                .collect()
+            n.iter().flatten().map(|v| v.as_vec3()).collect()
         });
         let indices = (0..triangles.len() as u32)
             .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])

@@ -82,6 +82,8 @@ pub struct Spec {
     pub cos: (f64, f64),
     /// Force S geometric normals along this axis (sign chosen to face `wi`).
     pub axis: Option<DVec3>,
+    /// Range of the angle between the triangle edges at the first vertex, radians.
+    pub angle: (f64, f64),
 }
 
 impl Spec {
@@ -95,6 +97,7 @@ impl Spec {
             aspect: 1.0,
             cos: (0.3, 1.0),
             axis: None,
+            angle: (0.3 * std::f64::consts::PI, 0.7 * std::f64::consts::PI),
         }
     }
 }
@@ -144,7 +147,7 @@ impl Builder<'_> {
         let s = self.spec.scale;
         let (ts, tt) = basis_f64(ng);
         let a = self.rng.range(0.0, std::f64::consts::TAU);
-        let beta = self.rng.range(0.3, 0.7) * std::f64::consts::PI;
+        let beta = self.rng.range(self.spec.angle.0, self.spec.angle.1);
         let size = s * self.rng.range(0.2, 0.6);
         let e1 = (ts * a.cos() + tt * a.sin()) * size;
         let e2 = (ts * (a + beta).cos() + tt * (a + beta).sin()) * size * self.spec.aspect;
