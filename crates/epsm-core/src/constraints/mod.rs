@@ -11,6 +11,8 @@
 mod collinear;
 mod fixed_direction;
 mod half_vector;
+#[cfg(test)]
+mod receiver_tests;
 
 use glam::DVec3;
 use nalgebra::{Const, RealField, U1, Vector3};
