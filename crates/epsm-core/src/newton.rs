@@ -10,11 +10,12 @@
 use glam::DVec2;
 use nalgebra::DVector;
 
+use crate::constraints::assembly::{assemble, evaluate};
 use crate::drops::{DropReason, Dropped};
 use crate::motion::Motion;
 use crate::params::{ParamTable, Target};
 use crate::paths::{DiffPath, Node};
-use crate::solve::{SolveSettings, assemble, evaluate};
+use crate::solve::SolveSettings;
 
 /// Stopping rules of the re-solve.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -12,7 +12,7 @@ use epsm_render::Camera;
 use glam::{DVec2, DVec3};
 use nalgebra::{RealField, Vector3};
 
-use crate::motion::rotation;
+use crate::motion::place::rotation;
 use num_dual::Dual64;
 
 /// Camera eye and orthonormal basis in scalar type `T`, with the film

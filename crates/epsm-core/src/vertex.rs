@@ -74,7 +74,7 @@ impl Anchor {
         let (e1, e2) = (p1 - p0, p2 - p0);
         let cross = e1.cross(e2);
         let det = e1.length_squared() * e2.length_squared() - e1.dot(e2).powi(2);
-        if !(det > 1e-24 * e1.length_squared() * e2.length_squared()) {
+        if !det.is_finite() || det <= 1e-24 * e1.length_squared() * e2.length_squared() {
             return None;
         }
         let ng_world = (om.normal * cross).try_normalize()?;

@@ -8,6 +8,7 @@
 //! ([`Constraint::local`]). Fixed points are no constraints: their vertices
 //! are not unknowns.
 
+pub(crate) mod assembly;
 mod collinear;
 mod fixed_direction;
 mod half_vector;

@@ -3,6 +3,7 @@
 //! Newton and stress tests.
 #![allow(dead_code)]
 
+pub mod builder;
 pub mod manual;
 pub mod synth;
 
