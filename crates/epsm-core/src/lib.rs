@@ -55,6 +55,8 @@ pub mod params;
 pub mod paths;
 pub mod pixel;
 pub mod solve;
+#[cfg(test)]
+mod testing;
 pub mod vertex;
 
 pub use drops::{DropCounts, DropReason, Dropped};

@@ -268,3 +268,6 @@ impl ParamTable {
         }
     }
 }
+
+#[cfg(test)]
+mod tests;
