@@ -45,6 +45,22 @@ impl BaseFrame {
         })
     }
 
+    /// `∂[F(n)·w]_xy/∂n` for fixed `w` (two gradient vectors, `n` treated as
+    /// a free 3-vector as in [`BaseFrame::project`]). With `a = n₀`,
+    /// `k = a×n`, `c = a·n` and `v ∈ {s₀, t₀}`:
+    /// `∂(w·Rv)/∂n = (w·v) a − (w·a) v + ((k·w)(v×a) + (k·v)(w×a))/(1+c) − (k·v)(k·w) a/(1+c)²`.
+    pub fn project_gradient(&self, n: DVec3, w: DVec3) -> [DVec3; 2] {
+        let a = self.n0;
+        let k = a.cross(n);
+        let inv = 1.0 / (1.0 + a.dot(n));
+        let (kw, wa) = (k.dot(w), w.cross(a));
+        [self.s0, self.t0].map(|v| {
+            let kv = k.dot(v);
+            a * w.dot(v) - v * w.dot(a) + (v.cross(a) * kw + wa * kv) * inv
+                - a * (kv * kw * inv * inv)
+        })
+    }
+
     /// `[F(n)·w]_xy`: the tangent components of `w` in the transported frame.
     pub fn project<T: RealField + Copy>(&self, n: &Vector3<T>, w: &Vector3<T>) -> [T; 2] {
         let [s, t] = self.tangents(n);

@@ -12,12 +12,12 @@ pub(crate) mod assembly;
 mod collinear;
 mod fixed_direction;
 mod half_vector;
+mod jacobian;
 #[cfg(test)]
 mod receiver_tests;
 
 use glam::DVec3;
-use nalgebra::{Const, RealField, U1, Vector3};
-use num_dual::DualSVec64;
+use nalgebra::{RealField, Vector3};
 
 use crate::frame::BaseFrame;
 
@@ -98,12 +98,25 @@ impl Constraint {
         }
     }
 
-    /// The value and the 2×12 local Jacobian at `(a, x, b, n)` (forward-mode duals).
-    pub fn local(&self, a: DVec3, x: DVec3, b: DVec3, n: DVec3) -> Local {
+    /// `C` in `f64`.
+    pub fn value(&self, a: DVec3, x: DVec3, b: DVec3, n: DVec3) -> [f64; 2] {
+        self.eval(&na(a), &na(x), &na(b), &na(n))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use nalgebra::{Const, U1};
+    use num_dual::DualSVec64;
+
+    use super::*;
+
+    /// The reference: value and 2×12 Jacobian of the generic `eval` with duals.
+    fn local_dual(con: &Constraint, a: DVec3, x: DVec3, b: DVec3, n: DVec3) -> Local {
         let lift = |v: DVec3, slot: usize| {
             Vector3::from_fn(|i, _| DualSVec64::<12>::from_re(v[i]).derivative(3 * slot + i))
         };
-        let c = self.eval(&lift(a, 0), &lift(x, 1), &lift(b, 2), &lift(n, 3));
+        let c = con.eval(&lift(a, 0), &lift(x, 1), &lift(b, 2), &lift(n, 3));
         let grad = c.map(|ci| {
             let d = ci.eps.unwrap_generic(Const::<12>, U1);
             [0, 1, 2, 3].map(|s| DVec3::new(d[3 * s], d[3 * s + 1], d[3 * s + 2]))
@@ -113,16 +126,6 @@ impl Constraint {
             grad,
         }
     }
-
-    /// `C` in `f64`.
-    pub fn value(&self, a: DVec3, x: DVec3, b: DVec3, n: DVec3) -> [f64; 2] {
-        self.eval(&na(a), &na(x), &na(b), &na(n))
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
 
     #[test]
     fn local_jacobians_match_central_differences() {
@@ -153,6 +156,17 @@ mod tests {
                 nodes: [0, 1, 2],
             };
             let local = con.local(a, x, b, n);
+            let dual = local_dual(&con, a, x, b, n);
+            for r in 0..2 {
+                assert!((local.value[r] - dual.value[r]).abs() < 1e-14, "{kind:?}");
+                for slot in 0..4 {
+                    let (g, d) = (local.grad[r][slot], dual.grad[r][slot]);
+                    assert!(
+                        (g - d).length() < 1e-13 * (1.0 + d.length()),
+                        "{kind:?} row {r} slot {slot}: {g} vs {d}"
+                    );
+                }
+            }
             let value = con.value(a, x, b, n);
             assert!((0..2).all(|r| (local.value[r] - value[r]).abs() < 1e-15));
             let h = 1e-6;

@@ -1,6 +1,5 @@
 //! Placement derivatives against central differences.
 
-use super::*;
 use crate::ParamTable;
 use crate::testing::scene;
 
