@@ -33,6 +33,15 @@ pub struct Ggx {
 }
 
 impl Ggx {
+    /// The distribution with roughness `alpha` clamped to `[1e-4, 1]` (α = 0
+    /// would make `D` a delta and its evaluation 0/0).
+    #[inline]
+    pub fn new(alpha: f32) -> Self {
+        Self {
+            alpha: alpha.clamp(1e-4, 1.0),
+        }
+    }
+
     /// The normal distribution `D(m)` (per steradian of `m`, projected area
     /// normalised: `∫ D(m) cos θm dm = 1`). Zero for `m` below the surface.
     #[inline]
@@ -122,7 +131,7 @@ mod tests {
     #[test]
     fn d_is_normalised_in_projected_area() {
         for alpha in [0.01f32, 0.1, 0.5, 1.0] {
-            let a = projected_area(Ggx { alpha });
+            let a = projected_area(Ggx::new(alpha));
             assert!((a - 1.0).abs() < 2e-3, "α = {alpha}: {a}");
         }
     }
@@ -130,7 +139,7 @@ mod tests {
     #[test]
     fn smith_terms_are_finite_and_bounded_for_extreme_alpha_and_grazing() {
         for alpha in [1e-4f32, 1e-2, 0.5, 1.0] {
-            let ggx = Ggx { alpha };
+            let ggx = Ggx::new(alpha);
             for z in [1e-3f32, 0.1, 1.0] {
                 let w = Vec3::new((1.0 - z * z).sqrt(), 0.0, z);
                 let g1 = ggx.g1(w);

@@ -2,6 +2,18 @@
 //!
 //! All functions work in the local shading frame (`+z` = shading normal) with
 //! the crate's `wi`/`wo` convention. `eval` includes `|cos θo|`.
+//!
+//! | variant | file | vertex kind | lobes |
+//! |---|---|---|---|
+//! | [`Diffuse`] | `diffuse.rs` | diffuse | cosine-weighted reflection |
+//! | [`Conductor`] | `conductor.rs` | specular | mirror reflection |
+//! | [`RoughConductor`] | `rough_conductor.rs` | glossy | GGX reflection ([`microfacet`]) |
+//! | [`Dielectric`] | `dielectric.rs` | specular | Fresnel reflection + refraction ([`fresnel`]) |
+//!
+//! Sidedness: a one-sided material (`two_sided = false`) does not scatter
+//! light arriving from behind (`wi.z ≤ 0`: `sample` is `None`, `eval` and `pdf`
+//! are 0). A two-sided material seen from behind is mirrored through the
+//! tangent plane. Reflection lobes need `wo` on the side of `wi`.
 
 pub mod conductor;
 pub mod dielectric;
@@ -162,8 +174,8 @@ impl Material {
 
     /// Solid-angle pdf with which `sample` returns `wo` through a non-delta
     /// lobe (zero where `eval` is zero by construction, and for delta lobes).
-    pub fn pdf(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> f32 {
-        let _ = uv;
+    /// No current lobe's pdf depends on the texture coordinates `_uv`.
+    pub fn pdf(&self, wi: Vec3, wo: Vec3, _uv: Vec2) -> f32 {
         let Some(side) = self.side(wi) else {
             return 0.0;
         };

@@ -27,10 +27,11 @@ use super::microfacet::Ggx;
 use super::{BsdfSample, Lobe};
 
 /// Rough conductor: GGX microfacets with visible-normal sampling; Fresnel
-/// reflectance `tint` (constant over angle).
+/// reflectance `tint` (constant over angle). `alpha` outside `[1e-4, 1]` is
+/// clamped into it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RoughConductor {
-    /// GGX roughness α (isotropic), in [1e-4, 1].
+    /// GGX roughness α (isotropic), in [1e-4, 1] (clamped when used).
     pub alpha: f32,
     /// Reflectance per channel, in [0, 1].
     pub tint: Vec3,
@@ -38,7 +39,7 @@ pub struct RoughConductor {
 
 impl RoughConductor {
     fn ggx(&self) -> Ggx {
-        Ggx { alpha: self.alpha }
+        Ggx::new(self.alpha)
     }
 
     /// Samples a visible normal and reflects `wi` (local, `wi.z > 0`) about it.

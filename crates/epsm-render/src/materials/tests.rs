@@ -239,3 +239,37 @@ fn smooth_conductor_reflects_with_tint() {
         "one-sided"
     );
 }
+
+#[test]
+fn diffuse_reads_its_albedo_texture_at_uv() {
+    let mut image = crate::film::Image::new(2, 1);
+    image.set(0, 0, Vec3::new(0.9, 0.1, 0.1));
+    image.set(1, 0, Vec3::new(0.1, 0.1, 0.9));
+    let albedo = Texture::Image(std::sync::Arc::new(image));
+    let m = material(Bsdf::Diffuse(Diffuse { albedo }), false);
+    let (wi, u) = (Vec3::Z, Vec2::new(0.4, 0.3));
+    for (uv, texel) in [
+        (Vec2::new(0.25, 0.5), Vec3::new(0.9, 0.1, 0.1)),
+        (Vec2::new(0.75, 0.5), Vec3::new(0.1, 0.1, 0.9)),
+    ] {
+        let s = m.sample(wi, uv, 0.5, u).expect("diffuse sample");
+        assert!(s.weight.distance(texel) < 1e-6);
+        let f = m.eval(wi, s.wo, uv);
+        assert!((f / s.pdf).distance(texel) < 1e-5);
+    }
+}
+
+#[test]
+fn zero_roughness_is_clamped_instead_of_producing_nan() {
+    let m = material(rough(0.0, Vec3::ONE), false);
+    let wi = Vec3::new(0.6, 0.0, 0.8);
+    let s = m
+        .sample(wi, Vec2::ZERO, 0.5, Vec2::new(0.2, 0.4))
+        .expect("near-mirror sample");
+    assert!(
+        s.weight.is_finite()
+            && s.pdf.is_finite()
+            && s.wo.distance(Vec3::new(-0.6, 0.0, 0.8)) < 1e-2
+    );
+    assert!(m.eval(wi, s.wo, Vec2::ZERO).is_finite());
+}
