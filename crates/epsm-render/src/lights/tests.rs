@@ -320,3 +320,56 @@ fn envmap_lookup_convention_and_constant_map_value() {
     let texel = plain.image().get(12, 5) * 1.5;
     assert_eq!(Background::EnvMap(Arc::new(plain)).eval(centre), texel);
 }
+
+#[test]
+fn area_pdf_integrates_to_one_over_the_directions_that_see_the_light() {
+    // A 0.5 × 0.5 square at height 1 facing down, tilted a little about x.
+    let to_world = DAffine3::from_translation(DVec3::new(0.1, 1.0, 0.0))
+        * DAffine3::from_mat3(
+            DMat3::from_rotation_x(PI / 2.0 + 0.2) * DMat3::from_diagonal(DVec3::splat(0.5)),
+        );
+    let object = emitter(to_world, Vec3::ONE);
+    let table = LightTable::build(std::slice::from_ref(&object), &[], &black(), None);
+    let corners: Vec<DVec3> = object
+        .mesh
+        .positions
+        .iter()
+        .map(|p| to_world.transform_point3(p.as_dvec3()))
+        .collect();
+    let (origin, normal) = (
+        corners[0],
+        (corners[1] - corners[0])
+            .cross(corners[3] - corners[0])
+            .normalize(),
+    );
+    let (e1, e2) = (corners[1] - corners[0], corners[3] - corners[0]);
+    // Midpoint rule over the cap θ < 0.6 about +y, which contains the square.
+    let (n, cap) = (1000usize, 0.6f64);
+    let (dt, dp) = (cap / n as f64, 2.0 * PI / (2 * n) as f64);
+    let mut integral = 0.0;
+    for i in 0..n {
+        let theta = (i as f64 + 0.5) * dt;
+        for j in 0..2 * n {
+            let phi = (j as f64 + 0.5) * dp;
+            let dir = DVec3::new(
+                theta.sin() * phi.cos(),
+                theta.cos(),
+                theta.sin() * phi.sin(),
+            );
+            // Ray from the origin against the square's plane, then its parameters.
+            let t = origin.dot(normal) / dir.dot(normal);
+            let rel = dir * t - origin;
+            let (a, b) = (
+                rel.dot(e1) / e1.length_squared(),
+                rel.dot(e2) / e2.length_squared(),
+            );
+            if t > 0.0 && (0.0..1.0).contains(&a) && (0.0..1.0).contains(&b) {
+                let y = (dir * t).as_vec3();
+                let triangle = if b <= a { 0 } else { 1 };
+                let pdf = table.pdf_area(0, triangle, Vec3::ZERO, y, normal.as_vec3());
+                integral += pdf as f64 * theta.sin() * dt * dp;
+            }
+        }
+    }
+    assert!((integral - 1.0).abs() < 2e-3, "∫ pdf dω = {integral}");
+}
