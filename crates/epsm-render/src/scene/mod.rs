@@ -105,7 +105,12 @@ impl Scene {
     /// Builds the BVHs and light tables.
     pub fn new(parts: SceneParts) -> crate::error::Result<Self> {
         let accel = Accel::build(&parts.objects);
-        let lights = LightTable::build(&parts.objects, &parts.point_lights, &parts.background);
+        let lights = LightTable::build(
+            &parts.objects,
+            &parts.point_lights,
+            &parts.background,
+            accel.world_bounds(),
+        );
         Ok(Self {
             parts,
             accel,
@@ -216,6 +221,7 @@ impl Scene {
             &self.parts.objects,
             &self.parts.point_lights,
             &self.parts.background,
+            self.accel.world_bounds(),
         );
     }
 }
