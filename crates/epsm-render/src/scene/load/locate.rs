@@ -90,6 +90,7 @@ impl Locator {
             .iter()
             .flat_map(|e| [(e, &e.key), (e, &e.value)])
             .filter(|(_, r)| covers(r))
+            .rev() // children follow their parent: on a tie, the innermost wins
             .min_by_key(|(_, r)| r.len())
             .map(|(e, _)| e.path.as_str())
     }
