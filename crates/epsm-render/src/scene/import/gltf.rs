@@ -89,7 +89,7 @@ fn primitive(
         Some(i) => i.into_u32().collect(),
         None => (0..positions.len() as u32).collect(),
     };
-    if flat.len() % 3 != 0 {
+    if !flat.len().is_multiple_of(3) {
         return Err(format!("{} indices do not form triangles", flat.len()));
     }
     let mirror = linear.determinant() < 0.0;

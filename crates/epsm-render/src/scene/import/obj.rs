@@ -60,7 +60,7 @@ fn convert(m: tobj::Mesh, path: &Path, name: &str) -> Result<Mesh> {
     } else {
         Vec::new()
     };
-    if m.indices.len() % 3 != 0 {
+    if !m.indices.len().is_multiple_of(3) {
         let msg = format!("{} indices do not form triangles", m.indices.len());
         return Err(SceneError::new(path, name.to_owned(), msg).into());
     }
