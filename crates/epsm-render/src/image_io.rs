@@ -238,6 +238,29 @@ mod tests {
     }
 
     #[test]
+    fn alpha_channels_are_ignored_on_read() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let png = dir.path().join("rgba.png");
+        let file = std::fs::File::create(&png).expect("create");
+        image::codecs::png::PngEncoder::new(file)
+            .write_image(&[255, 0, 188, 7], 1, 1, image::ExtendedColorType::Rgba8)
+            .expect("encode");
+        let px = read_image(&png).expect("read rgba png").get(0, 0);
+        assert!(
+            (px.x - 1.0).abs() < 1e-6 && px.y == 0.0 && (px.z - 0.5).abs() < 0.003,
+            "{px}"
+        );
+        let exr = dir.path().join("rgba.exr");
+        exr::prelude::write_rgba_file(&exr, 2, 1, |x, _| (x as f32, 2.0, 3.0, 0.25))
+            .expect("encode");
+        let img = read_image(&exr).expect("read rgba exr");
+        assert_eq!(
+            img.pixels,
+            vec![Vec3::new(0.0, 2.0, 3.0), Vec3::new(1.0, 2.0, 3.0)]
+        );
+    }
+
+    #[test]
     fn atomic_write_replaces_the_file_and_leaves_no_temporary_behind() {
         let dir = tempfile::tempdir().expect("temp dir");
         let path = dir.path().join("d.exr");

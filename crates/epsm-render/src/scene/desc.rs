@@ -186,7 +186,7 @@ pub enum ShapeKind {
 
 /// A scale: one number for all axes or one per axis.
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
-#[serde(untagged)]
+#[serde(untagged, expecting = "a number or an array [sx, sy, sz]")]
 pub enum ScaleDesc {
     /// The same factor on every axis.
     Uniform(f64),

@@ -1,7 +1,7 @@
 //! Loading scene files (the format is [`desc`](super::desc), documented in
 //! `docs/scene-format.md`): parse the TOML, deserialize it with unknown keys
 //! rejected, check every value against its documented range and build the
-//! [`SceneParts`]. Every error is a [`SceneError`] naming the file, the dotted
+//! [`SceneParts`]. Every error is a [`SceneError`](crate::error::SceneError) naming the file, the dotted
 //! field (`objects[2].material`) and what was expected, with the line when the
 //! file has one. Relative paths (meshes, textures, environment maps) resolve
 //! against the scene file's directory; each mesh or image file is read once
@@ -34,7 +34,7 @@ use serde::de::DeserializeOwned;
 
 pub use locate::Locator;
 
-use crate::error::{Error, Result, SceneError};
+use crate::error::{Error, Result};
 use crate::scene::desc::SceneDesc;
 use crate::scene::{Scene, SceneParts};
 
@@ -61,7 +61,7 @@ pub fn parts_from_str(text: &str, file: &Path) -> Result<SceneParts> {
 
 /// Parses `text` as TOML into `T` (any serde type, such as a problem file
 /// that embeds a [`SceneDesc`]), returning it with a [`Locator`] for later
-/// semantic errors. Syntax and type errors are located [`SceneError`]s.
+/// semantic errors. Syntax and type errors are located [`SceneError`](crate::error::SceneError)s.
 pub fn parse_toml<T: DeserializeOwned>(text: &str, file: &Path) -> Result<(T, Locator)> {
     let root = toml::de::DeTable::parse(text)
         .map_err(|e| Error::from(locate::syntax_error(file, text, &e)))?;
@@ -87,12 +87,4 @@ pub fn parts_from_desc(
         prefix,
     };
     build::parts(desc, &ctx)
-}
-
-/// The [`SceneError`] inside `err`, if it is one (for callers that re-locate).
-pub fn scene_error(err: &Error) -> Option<&SceneError> {
-    match err {
-        Error::Scene(e) => Some(e),
-        _ => None,
-    }
 }

@@ -126,6 +126,12 @@ pub fn syntax_error(file: &Path, text: &str, err: &toml::de::Error) -> SceneErro
     };
     let starts = line_starts(text);
     let line = starts.partition_point(|&s| s <= span.start).max(1);
+    // Unclosed constructs fail at the end of the file: blame the last line with content.
+    let lines: Vec<&str> = text.lines().collect();
+    let line = (1..=line.min(lines.len()))
+        .rev()
+        .find(|&l| !is_blank(lines[l - 1]))
+        .unwrap_or(line);
     let field = field_at_line(text, line);
     SceneError::new(file, document_if_empty(field), message).at_line(line)
 }
@@ -164,6 +170,12 @@ fn field_at_line(text: &str, line: usize) -> String {
     join(&table, &key)
 }
 
+/// Whether a line holds nothing but whitespace or a comment.
+fn is_blank(line: &str) -> bool {
+    let l = line.trim_start();
+    l.is_empty() || l.starts_with('#')
+}
+
 fn line_starts(text: &str) -> Vec<usize> {
     std::iter::once(0)
         .chain(text.match_indices('\n').map(|(i, _)| i + 1))
@@ -190,4 +202,54 @@ fn document_if_empty(field: String) -> String {
 fn quoted_after<'a>(message: &'a str, prefix: &str) -> Option<&'a str> {
     let rest = &message[message.find(prefix)? + prefix.len()..];
     rest.split('`').next()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const TEXT: &str = "[camera]\nfov = 40\n\n[[objects]]\nname = \"a\"\n\n[[objects]]\nname = \"b\"\nrotate = [{ axis = [0, 1, 0], angle = 5 }]\n";
+
+    fn locator() -> Locator {
+        let root = DeTable::parse(TEXT).expect("valid TOML");
+        Locator::new(TEXT, &root)
+    }
+
+    #[test]
+    fn fields_map_to_their_lines_and_missing_fields_to_their_table() {
+        let l = locator();
+        assert_eq!(l.line("camera.fov"), Some(2));
+        assert_eq!(l.line("objects[1].name"), Some(8));
+        assert_eq!(l.line("objects[1].rotate[0].angle"), Some(9));
+        assert_eq!(
+            l.line("objects[1].material"),
+            Some(7),
+            "falls back to the [[objects]] header"
+        );
+        assert_eq!(l.line("render.spp"), None);
+    }
+
+    #[test]
+    fn spans_map_to_the_innermost_field() {
+        let l = locator();
+        let at = |needle: &str| {
+            let start = TEXT.find(needle).expect("needle in text");
+            l.path_at(&(start..start + needle.len())).map(str::to_owned)
+        };
+        assert_eq!(at("\"b\"").as_deref(), Some("objects[1].name"));
+        assert_eq!(at("5").as_deref(), Some("objects[1].rotate[0].angle"));
+        assert_eq!(at("40").as_deref(), Some("camera.fov"));
+    }
+
+    #[test]
+    fn syntax_errors_are_located_by_header_and_key() {
+        assert_eq!(field_at_line(TEXT, 8), "objects[1].name");
+        assert_eq!(field_at_line(TEXT, 5), "objects[0].name");
+        assert_eq!(field_at_line(TEXT, 7), "objects[1]");
+        assert_eq!(field_at_line("not toml at all", 1), "");
+        let broken = "[camera]\nfov = [1, 2\n";
+        let err = DeTable::parse(broken).expect_err("unclosed array");
+        let e = syntax_error(Path::new("x.toml"), broken, &err);
+        assert_eq!((e.field.as_str(), e.line), ("camera.fov", Some(2)));
+    }
 }
