@@ -49,6 +49,11 @@ fn image_error(path: &Path, message: impl std::fmt::Display) -> Error {
     }
 }
 
+/// Whether `path`'s extension names a format this module reads and writes.
+pub fn is_supported(path: &Path) -> bool {
+    format_of(path).is_ok()
+}
+
 /// Reads a PNG (sRGB → linear) or EXR (linear) file as linear RGB.
 pub fn read_image(path: &Path) -> Result<Image> {
     match format_of(path)? {
@@ -58,7 +63,7 @@ pub fn read_image(path: &Path) -> Result<Image> {
 }
 
 /// Writes `img` as PNG (sRGB, 8-bit, clamped) or EXR (32-bit float RGB),
-/// chosen by `path`'s extension, atomically.
+/// chosen by `path`'s extension, atomically. The directory must exist.
 pub fn write_image(path: &Path, img: &Image) -> Result<()> {
     let format = format_of(path)?;
     if img.pixels.len() != img.width as usize * img.height as usize || img.pixels.is_empty() {

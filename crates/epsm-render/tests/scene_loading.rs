@@ -195,3 +195,30 @@ fn semantic_errors_carry_the_line_of_their_field() {
     assert_eq!(e.line, Some(14));
     assert_eq!(e.file, Path::new("dir/s.toml"));
 }
+
+/// A problem file embedding a scene under `[scene]`, as `epsm-core` does.
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Problem {
+    scene: epsm_render::scene::desc::SceneDesc,
+    iterations: u32,
+}
+
+#[test]
+fn an_embedded_scene_reports_prefixed_fields_and_file_lines() {
+    use epsm_render::scene::load::{parse_toml, parts_from_desc};
+    let text = "iterations = 10\n[scene.camera]\norigin = [0, 0, 5]\ntarget = [0, 0, 0]\n\
+                resolution = [8, 8]\n[scene.materials.w]\ntype = \"diffuse\"\n\
+                [[scene.objects]]\nname = \"a\"\nshape = \"cube\"\nmaterial = \"w\"\nscale = 0\n";
+    let file = Path::new("problem.toml");
+    let (problem, locator) = parse_toml::<Problem>(text, file).expect("valid TOML");
+    assert_eq!(problem.iterations, 10);
+    let err = parts_from_desc(&problem.scene, file, &locator, "scene").expect_err("zero scale");
+    let epsm_render::Error::Scene(e) = err else {
+        panic!("expected a scene error, got {err}")
+    };
+    assert_eq!(
+        (e.field.as_str(), e.line),
+        ("scene.objects[0].scale", Some(12))
+    );
+}

@@ -11,7 +11,7 @@ use super::object::Objects;
 use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::film::Image;
-use crate::image_io::read_image;
+use crate::image_io::{is_supported, read_image};
 use crate::lights::{Background, EnvMap, PointLight};
 use crate::materials::{Bsdf, Conductor, Dielectric, Diffuse, Material, RoughConductor, Texture};
 use crate::scene::desc::{
@@ -102,15 +102,9 @@ fn render(r: &RenderDesc, ctx: &Ctx) -> Result<RenderSettings> {
 /// Loads the image at `relative` (from field `field`) through the cache.
 fn image(field: &str, relative: &str, ctx: &Ctx, images: &mut ImageCache) -> Result<Arc<Image>> {
     let path = ctx.resolve(relative);
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    if !matches!(ext.as_deref(), Some("png" | "exr")) {
-        return Err(ctx.err(
-            field,
-            format!("expected a .png or .exr file, found \"{relative}\""),
-        ));
+    if !is_supported(&path) {
+        let msg = format!("expected a .png or .exr file, found \"{relative}\"");
+        return Err(ctx.err(field, msg));
     }
     let canonical = path
         .canonicalize()
