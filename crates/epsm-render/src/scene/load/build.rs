@@ -2,7 +2,7 @@
 //! settings, background, materials and point lights here; objects in
 //! [`object`](super::object).
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -41,10 +41,10 @@ pub fn parts(desc: &SceneDesc, ctx: &Ctx) -> Result<SceneParts> {
         materials.push(material(name, m, ctx, &mut images)?);
     }
     let objects = Objects::new(ctx).build(&desc.objects, &materials)?;
-    let mut point_lights: Vec<PointLight> = Vec::with_capacity(desc.lights.len());
+    let mut names = HashSet::new();
+    let mut point_lights = Vec::with_capacity(desc.lights.len());
     for (i, l) in desc.lights.iter().enumerate() {
-        let seen: Vec<&str> = point_lights.iter().map(|p| p.name.as_str()).collect();
-        point_lights.push(light(&format!("lights[{i}]"), l, &seen, ctx)?);
+        point_lights.push(light(&format!("lights[{i}]"), l, &mut names, ctx)?);
     }
     if objects.is_empty() && point_lights.is_empty() {
         return Err(ctx.err(
@@ -217,8 +217,13 @@ fn material(name: &str, m: &MaterialDesc, ctx: &Ctx, images: &mut ImageCache) ->
     })
 }
 
-fn light(field: &str, l: &LightDesc, seen: &[&str], ctx: &Ctx) -> Result<PointLight, Error> {
-    ctx.unique_name(&format!("{field}.name"), &l.name, seen, "light")?;
+fn light<'n>(
+    field: &str,
+    l: &'n LightDesc,
+    names: &mut HashSet<&'n str>,
+    ctx: &Ctx,
+) -> Result<PointLight, Error> {
+    ctx.unique_name(&format!("{field}.name"), &l.name, names, "light")?;
     Ok(PointLight {
         name: l.name.clone(),
         position: ctx.vec3(&format!("{field}.position"), l.position)?,

@@ -2,6 +2,7 @@
 //! field name, checks one documented range and returns the value in the
 //! renderer's types, or a located [`SceneError`] saying what was expected.
 
+use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 
 use glam::{DVec3, Vec3};
@@ -100,18 +101,19 @@ impl Ctx<'_> {
         }
     }
 
-    /// A non-empty name not already in `seen` (`what` is "object", ...).
-    pub fn unique_name(
+    /// Checks that `name` is non-empty and not in `seen`, then adds it
+    /// (`what` is "object", "light", ...).
+    pub fn unique_name<'n>(
         &self,
         field: &str,
-        name: &str,
-        seen: &[&str],
+        name: &'n str,
+        seen: &mut HashSet<&'n str>,
         what: &str,
     ) -> Result<(), Error> {
         if name.trim().is_empty() {
             return Err(self.err(field, format!("{what} name must not be empty")));
         }
-        if seen.contains(&name) {
+        if !seen.insert(name) {
             return Err(self.err(field, format!("duplicate {what} name \"{name}\"")));
         }
         Ok(())

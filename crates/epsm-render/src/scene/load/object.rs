@@ -2,7 +2,7 @@
 //! scene and shared), transforms (`world_from_object = translate · rotate[n−1]
 //! · … · rotate[0] · scale`), material references and emission.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -40,45 +40,46 @@ impl<'a> Objects<'a> {
 
     /// All objects of the file; `materials` resolves material names.
     pub fn build(mut self, descs: &[ObjectDesc], materials: &[Material]) -> Result<Vec<Object>> {
-        let mut objects: Vec<Object> = Vec::with_capacity(descs.len());
+        let mut names = HashSet::new();
+        let mut objects = Vec::with_capacity(descs.len());
         for (i, d) in descs.iter().enumerate() {
             let field = format!("objects[{i}]");
-            let seen: Vec<&str> = objects.iter().map(|o| o.name.as_str()).collect();
+            let name_field = format!("{field}.name");
             self.ctx
-                .unique_name(&format!("{field}.name"), &d.name, &seen, "object")?;
-            let material = materials
-                .iter()
-                .position(|m| m.name == d.material)
-                .ok_or_else(|| {
-                    let known: Vec<&str> = materials.iter().map(|m| m.name.as_str()).collect();
-                    let msg = format!(
-                        "unknown material \"{}\" (defined: {})",
-                        d.material,
-                        if known.is_empty() {
-                            "none".to_owned()
-                        } else {
-                            known.join(", ")
-                        }
-                    );
-                    self.ctx.err(&format!("{field}.material"), msg)
-                })?;
-            let emission = match d.emission {
-                Some(e) => Some(
-                    self.ctx
-                        .color(&format!("{field}.emission"), e, f64::INFINITY)?,
-                ),
-                None => None,
-            };
-            let source = self.source(&field, d)?;
-            objects.push(Object {
-                name: d.name.clone(),
-                mesh: self.mesh(&field, source, d.flip_normals)?,
-                world_from_object: self.transform(&field, d)?,
-                material: material as u32,
-                emission,
-            });
+                .unique_name(&name_field, &d.name, &mut names, "object")?;
+            objects.push(self.object(&field, d, materials)?);
         }
         Ok(objects)
+    }
+
+    /// One object, its name already checked.
+    fn object(&mut self, field: &str, d: &ObjectDesc, materials: &[Material]) -> Result<Object> {
+        let ctx = self.ctx;
+        let material = materials
+            .iter()
+            .position(|m| m.name == d.material)
+            .ok_or_else(|| {
+                let known: Vec<&str> = materials.iter().map(|m| m.name.as_str()).collect();
+                let known = if known.is_empty() {
+                    "none".to_owned()
+                } else {
+                    known.join(", ")
+                };
+                let msg = format!("unknown material \"{}\" (defined: {known})", d.material);
+                ctx.err(&format!("{field}.material"), msg)
+            })?;
+        let emission = d
+            .emission
+            .map(|e| ctx.color(&format!("{field}.emission"), e, f64::INFINITY))
+            .transpose()?;
+        let source = self.source(field, d)?;
+        Ok(Object {
+            name: d.name.clone(),
+            mesh: self.mesh(field, source, d.flip_normals)?,
+            world_from_object: self.transform(field, d)?,
+            material: material as u32,
+            emission,
+        })
     }
 
     /// Checks `shape` / `mesh` / `subdivisions` and names the mesh source.
