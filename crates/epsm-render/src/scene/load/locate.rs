@@ -106,7 +106,7 @@ impl Locator {
         let message = err.message();
         if let Some(name) = quoted_after(message, "missing field `")
             .or_else(|| quoted_after(message, "unknown field `"))
-            .filter(|name| !field.ends_with(name))
+            .filter(|name| field.rsplit(['.', ']']).next() != Some(name))
         {
             field = join(&field, name);
         }
