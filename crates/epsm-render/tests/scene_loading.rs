@@ -222,3 +222,14 @@ fn an_embedded_scene_reports_prefixed_fields_and_file_lines() {
         ("scene.objects[0].scale", Some(12))
     );
 }
+
+#[test]
+fn scene_descriptions_survive_a_toml_round_trip() {
+    use epsm_render::scene::desc::SceneDesc;
+    use epsm_render::scene::load::parse_toml;
+    let (desc, _) = parse_toml::<SceneDesc>(&doc_example(), Path::new("example.toml"))
+        .expect("the example parses");
+    let text = toml::to_string(&desc).expect("serializes");
+    let (back, _) = parse_toml::<SceneDesc>(&text, Path::new("again.toml")).expect("reparses");
+    assert_eq!(back, desc);
+}

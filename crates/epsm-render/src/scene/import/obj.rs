@@ -1,8 +1,8 @@
 //! Wavefront OBJ meshes through `tobj`: polygons are fan-triangulated,
 //! vertices are de-duplicated to a single index per vertex, and every model
 //! (`o`/`g` group) of the file is merged into one mesh. Normals and texture
-//! coordinates are kept when every model has them for every vertex; normals
-//! are normalized. Materials (`mtllib`, `usemtl`) are ignored: the scene file
+//! coordinates are kept when every model has them for every vertex (a zero
+//! normal counts as missing); normals are normalized. Materials (`mtllib`, `usemtl`) are ignored: the scene file
 //! assigns the material. OBJ's `v = 0` is the bottom row, as
 //! [`Image::lookup`](crate::film::Image::lookup) expects.
 //!
@@ -42,16 +42,13 @@ pub fn load(path: &Path) -> Result<Mesh> {
 fn convert(m: tobj::Mesh, path: &Path, name: &str) -> Result<Mesh> {
     let n = m.positions.len() / 3;
     let positions = m.positions.chunks_exact(3).map(Vec3::from_slice).collect();
+    // Zero normals stand for vertices the file gave none: the set is incomplete.
     let normals = if m.normals.len() == 3 * n {
         m.normals
             .chunks_exact(3)
-            .enumerate()
-            .map(|(i, v)| {
-                Vec3::from_slice(v).try_normalize().ok_or_else(|| {
-                    SceneError::new(path, format!("{name}.normals[{i}]"), "zero-length normal")
-                })
-            })
-            .collect::<Result<_, _>>()?
+            .map(|v| Vec3::from_slice(v).try_normalize())
+            .collect::<Option<Vec<_>>>()
+            .unwrap_or_default()
     } else {
         Vec::new()
     };
@@ -113,6 +110,15 @@ mod tests {
         let mesh = load_mesh(&write(dir.path(), "mixed.obj", text)).expect("valid OBJ");
         assert_eq!(mesh.len(), 2);
         assert!(mesh.normals.is_empty() && mesh.uvs.is_empty());
+    }
+
+    #[test]
+    fn faces_without_normals_make_the_normals_incomplete() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvn 0 0 1\nf 1//1 2//1 3//1\nf 2 4 3\n";
+        let mesh = load_mesh(&write(dir.path(), "partial.obj", text)).expect("valid OBJ");
+        assert_eq!(mesh.len(), 2);
+        assert!(mesh.normals.is_empty(), "{:?}", mesh.normals);
     }
 
     #[test]
