@@ -36,7 +36,6 @@ pub fn load(path: &Path) -> Result<Mesh> {
         .or_else(|| doc.scenes().next())
         .ok_or_else(|| fail("scenes", &"the file has no scene"))?;
     let mut mesh = Mesh::default();
-    let mut first = true;
     let mut stack: Vec<(gltf::Node, Mat4)> = scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
     while let Some((node, parent)) = stack.pop() {
         let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
@@ -45,8 +44,7 @@ pub fn load(path: &Path) -> Result<Mesh> {
                 let field = format!("meshes[{}].primitives[{}]", m.index(), prim.index());
                 let part = primitive(&prim, &buffers, world)
                     .map_err(|msg| SceneError::new(path, field, msg))?;
-                super::append(&mut mesh, part, first);
-                first = false;
+                super::append(&mut mesh, part);
             }
         }
         stack.extend(node.children().map(|c| (c, world)));

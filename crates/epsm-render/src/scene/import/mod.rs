@@ -99,8 +99,9 @@ pub fn validate(mesh: &Mesh, file: &Path) -> Result<()> {
 }
 
 /// Appends `src` to `dst`, offsetting indices. Normals and uvs survive only
-/// when both meshes have them (`first` says `dst` is still empty).
-fn append(dst: &mut Mesh, src: Mesh, first: bool) {
+/// when every part has them (an empty `dst` takes `src`'s).
+fn append(dst: &mut Mesh, src: Mesh) {
+    let first = dst.positions.is_empty();
     let base = dst.positions.len() as u32;
     if first || (!dst.normals.is_empty() && !src.normals.is_empty()) {
         dst.normals.extend(src.normals);

@@ -31,9 +31,8 @@ pub fn load(path: &Path) -> Result<Mesh> {
     let (models, _materials) = tobj::load_obj(path, &options)
         .map_err(|e| SceneError::new(path, "obj", format!("malformed OBJ: {e}")))?;
     let mut mesh = Mesh::default();
-    for (i, model) in models.into_iter().enumerate() {
-        let part = convert(model.mesh, path, &model.name)?;
-        super::append(&mut mesh, part, i == 0);
+    for model in models {
+        super::append(&mut mesh, convert(model.mesh, path, &model.name)?);
     }
     Ok(mesh)
 }
