@@ -25,7 +25,7 @@ pub struct Ctx<'a> {
 
 impl Ctx<'_> {
     /// The full dotted path of `field`.
-    pub fn path(&self, field: &str) -> String {
+    fn path(&self, field: &str) -> String {
         if self.prefix.is_empty() {
             field.to_owned()
         } else {
