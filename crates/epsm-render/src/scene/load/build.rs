@@ -138,11 +138,11 @@ fn background(b: &BackgroundDesc, ctx: &Ctx, images: &mut ImageCache) -> Result<
             let scale = b.scale.unwrap_or(1.0);
             let scale = ctx.within("background.scale", scale, 0.0, f64::MAX, "a value >= 0")?;
             let rotate = ctx.finite("background.rotate", b.rotate.unwrap_or(0.0))?;
-            Ok(Background::EnvMap(Arc::new(EnvMap {
-                image: (*image).clone(),
-                scale: scale as f32,
-                rotate_y: rotate.to_radians() as f32,
-            })))
+            Ok(Background::EnvMap(Arc::new(EnvMap::new(
+                (*image).clone(),
+                scale as f32,
+                rotate.to_radians() as f32,
+            ))))
         }
     }
 }
