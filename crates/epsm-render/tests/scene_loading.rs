@@ -169,7 +169,7 @@ fn full_scene_loads_with_shared_meshes_and_documented_values() {
         Background::EnvMap(env) => {
             assert_eq!(env.scale, 2.0);
             assert!((env.rotate_y - std::f32::consts::FRAC_PI_2).abs() < 1e-6);
-            assert_eq!((env.image.width, env.image.height), (8, 4));
+            assert_eq!((env.image().width, env.image().height), (8, 4));
         }
         other => panic!("expected an envmap, got {other:?}"),
     }
