@@ -4,9 +4,19 @@
 //! Model: an instance's world box is the box of the eight transformed corners
 //! of its mesh's object-space box, computed in `f64` and padded outwards by a
 //! relative 1e-5 so `f32` rounding never clips geometry. The top level is
-//! rebuilt (PLOC, obvhs `fastest_build`) whenever an instance moves: with at
-//! most a few thousand boxes that costs well under a millisecond and keeps
-//! the tree as good as a fresh build (a refit degrades it as objects move).
+//! rebuilt (PLOC, obvhs `fastest_build`) whenever an instance moves. Measured
+//! per moved instance (release, 2 loaded cores), rebuild versus refitting a
+//! binary BVH (obvhs `Bvh2::refit_from`) and converting it to a CWBVH:
+//!
+//! | instances | rebuild | refit | refit + convert |
+//! |---|---|---|---|
+//! | 10 | 5 µs | 0.7 µs | 2 µs |
+//! | 100 | 15 µs | 0.2 µs | 9 µs |
+//! | 1000 | 0.27 ms | 0.4 µs | 0.09 ms |
+//!
+//! All are negligible next to rendering a frame, and only the rebuild keeps
+//! the tree as good as a fresh build as objects move (a refit's boxes grow
+//! and overlap), so the top level is rebuilt.
 //!
 //! No parameters.
 
