@@ -91,8 +91,7 @@ pub fn solve(source: &PointCloud, target: &PointCloud, settings: &ExactSettings)
 
     // Warm start and candidate graph.
     let dual = solve_dual(&x, &y, diameter_sq(source, target), &settings.warm_start);
-    let widen = |v: &[f32]| v.iter().map(|&t| f64::from(t)).collect::<Vec<f64>>();
-    let (f, g) = (widen(&dual.f), widen(&dual.g));
+    let (f, g) = (dual.f, dual.g);
     let mut stats = SolveStats { pair_evaluations: dual.pairs, ..SolveStats::default() };
     let k = settings.candidates;
     let mut edges = best_partners(&x, &y, &dual.support.rows, &g, k);

@@ -48,9 +48,9 @@ pub struct EntropicPlan {
     /// The final regularisation ε (the squared blur).
     pub epsilon: f64,
     /// Source potential `f_i`, in source order.
-    pub f: Vec<f32>,
+    pub f: Vec<f64>,
     /// Target potential `g_j`, in target order.
-    pub g: Vec<f32>,
+    pub g: Vec<f64>,
     /// Barycentric projection `T(P_i) = Σ_j π_ij Q_j / Σ_j π_ij` of each source point.
     pub barycentres: Vec<Point>,
     /// Primal transport cost `Σ_ij π_ij c_ij` of the (row-normalised) plan.

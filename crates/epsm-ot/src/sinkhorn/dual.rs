@@ -19,7 +19,7 @@ use rayon::prelude::*;
 
 use super::SinkhornSettings;
 use crate::blocks::{Clustered, Support, fit_potentials};
-use crate::kernel::{RowSum, exp_nonpositive, stream_row};
+use crate::kernel::{RowSum, stream_row};
 use crate::points::PointCloud;
 
 /// A measure as the kernel sees it: points, their blocks and log-weights.
@@ -47,8 +47,8 @@ fn coarse_cloud(c: &Clustered) -> (PointCloud, Vec<f32>) {
 /// Dual potentials of one entropic problem, in the clusterings' orders.
 #[derive(Debug, Clone)]
 pub(crate) struct Dual {
-    pub f: Vec<f32>,
-    pub g: Vec<f32>,
+    pub f: Vec<f64>,
+    pub g: Vec<f64>,
     pub eps: f64,
     pub support: Support,
     pub iterations: usize,
@@ -56,29 +56,47 @@ pub(crate) struct Dual {
     pub marginal_error: f64,
 }
 
-/// `h_j = log w_j + g_j / ε`.
-fn offsets(log_w: &[f32], g: &[f32], eps: f64) -> Vec<f32> {
-    let inv = 1.0 / eps;
-    log_w.iter().zip(g).map(|(&w, &g)| (f64::from(w) + f64::from(g) * inv) as f32).collect()
+/// A potential shifted by its mean (summed in a fixed order) and rounded to `f32` for the kernel.
+///
+/// Potentials are only defined up to `f + κ, g − κ`; centring keeps `g_j − c_ij`
+/// small where it matters, so `f32` scores stay accurate even at tiny ε.
+fn centred(g: &[f64]) -> (Vec<f32>, f64) {
+    let kappa = g.iter().sum::<f64>() / g.len() as f64;
+    (g.iter().map(|&v| (v - kappa) as f32).collect(), kappa)
 }
 
-/// `out_i = −ε log Σ_j exp(h_j − c(x_i, y_j)/ε)` over the listed blocks, with the pair count.
-fn softmin(x: &Level, y: &Level, lists: &[Vec<u32>], h: &[f32], eps: f64) -> (Vec<f32>, u64) {
+/// The target ranges of a block list, with consecutive blocks merged into one range.
+fn merged_ranges(ranges: &[Range<usize>], list: &[u32]) -> Vec<Range<usize>> {
+    let mut out: Vec<Range<usize>> = Vec::with_capacity(list.len());
+    for &j in list {
+        let r = ranges[j as usize].clone();
+        match out.last_mut() {
+            Some(last) if last.end == r.start => last.end = r.end,
+            _ => out.push(r),
+        }
+    }
+    out
+}
+
+/// `out_i = −ε log Σ_j exp(log w_j + (g_j − c(x_i, y_j))/ε)` over the listed blocks, with the pair count.
+fn softmin(x: &Level, y: &Level, lists: &[Vec<u32>], g: &[f64], eps: f64) -> (Vec<f64>, u64) {
     let inv_eps = (1.0 / eps) as f32;
     let cols = y.cloud.columns();
-    let parts: Vec<(Vec<f32>, u64)> = x
+    let (g32, kappa) = centred(g);
+    let parts: Vec<(Vec<f64>, u64)> = x
         .ranges
         .par_iter()
         .zip(lists)
         .map(|(rows, list)| {
             let mut pairs = 0;
+            let targets = merged_ranges(&y.ranges, list);
             let out = rows
                 .clone()
                 .map(|i| {
                     let mut acc = RowSum::new();
-                    let blocks = list.iter().map(|&j| y.ranges[j as usize].clone());
-                    pairs += stream_row::<false>(&x.cloud.point(i), cols, h, inv_eps, blocks, &mut acc);
-                    (-eps * acc.log_sum()) as f32
+                    let blocks = targets.iter().cloned();
+                    pairs += stream_row::<false>(&x.cloud.point(i), cols, &y.log_w, &g32, inv_eps, blocks, &mut acc);
+                    -kappa - eps * acc.log_sum()
                 })
                 .collect();
             (out, pairs)
@@ -111,18 +129,17 @@ struct Loop<'a> {
 }
 
 impl Loop<'_> {
-    fn support(&self, f: &[f32], g: &[f32], eps: f64) -> Support {
-        let widen = |v: &[f32]| v.iter().map(|&t| f64::from(t)).collect::<Vec<_>>();
-        let fit_f = fit_potentials(self.x, &widen(f));
-        let fit_g = fit_potentials(self.y, &widen(g));
+    fn support(&self, f: &[f64], g: &[f64], eps: f64) -> Support {
+        let (fit_f, fit_g) = (fit_potentials(self.x, f), fit_potentials(self.y, g));
         Support::truncated(self.x, &fit_f, self.y, &fit_g, self.settings.truncation * eps)
     }
 
-    fn symmetric_step(&mut self, xl: &Level, yl: &Level, sup: &Support, f: &mut [f32], g: &mut [f32], eps: f64) {
-        let (ft, p1) = softmin(xl, yl, &sup.rows, &offsets(&yl.log_w, g, eps), eps);
-        let (gt, p2) = softmin(yl, xl, &sup.cols, &offsets(&xl.log_w, f, eps), eps);
-        f.iter_mut().zip(&ft).for_each(|(a, b)| *a = 0.5 * (*a + b));
-        g.iter_mut().zip(&gt).for_each(|(a, b)| *a = 0.5 * (*a + b));
+    /// One Sinkhorn update: `f ← softmin(g)`, then `g ← softmin(f)`.
+    fn step(&mut self, xl: &Level, yl: &Level, sup: &Support, f: &mut Vec<f64>, g: &mut Vec<f64>, eps: f64) {
+        let (ft, p1) = softmin(xl, yl, &sup.rows, g, eps);
+        *f = ft;
+        let (gt, p2) = softmin(yl, xl, &sup.cols, f, eps);
+        *g = gt;
         self.pairs += p1 + p2;
         self.iterations += 1;
     }
@@ -141,13 +158,10 @@ pub(crate) fn solve_dual(x: &Clustered, y: &Clustered, diameter_sq: f64, setting
     let whole = Support::dense(1, 1);
     let radius = |c: &Clustered| c.clusters.iter().map(|k| k.radius * k.range.len() as f64).sum::<f64>() / c.cloud.len() as f64;
     let jump_eps = (settings.jump_radii * radius(x).max(radius(y))).powi(2);
-    let eps0 = eps_list[0];
-    let (mut fc, p1) = softmin(&cx, &cy, &whole.rows, &cy.log_w, eps0);
-    let (mut gc, p2) = softmin(&cy, &cx, &whole.cols, &cx.log_w, eps0);
-    lp.pairs += p1 + p2;
-    let mut k = 1;
-    while k < eps_list.len() && eps_list[k] > jump_eps {
-        lp.symmetric_step(&cx, &cy, &whole, &mut fc, &mut gc, eps_list[k]);
+    let (mut fc, mut gc) = (vec![0.0; cx.log_w.len()], vec![0.0; cy.log_w.len()]);
+    let mut k = 0;
+    while k == 0 || (k < eps_list.len() && eps_list[k] > jump_eps) {
+        lp.step(&cx, &cy, &whole, &mut fc, &mut gc, eps_list[k]);
         k += 1;
     }
 
@@ -155,51 +169,65 @@ pub(crate) fn solve_dual(x: &Clustered, y: &Clustered, diameter_sq: f64, setting
     let eps_jump = eps_list[k - 1];
     let (fx, fy) = (Level::fine(x), Level::fine(y));
     let to_coarse = |n: usize| vec![vec![0u32]; n];
-    let (mut f, p1) = softmin(&fx, &cy, &to_coarse(fx.ranges.len()), &offsets(&cy.log_w, &gc, eps_jump), eps_jump);
-    let (mut g, p2) = softmin(&fy, &cx, &to_coarse(fy.ranges.len()), &offsets(&cx.log_w, &fc, eps_jump), eps_jump);
+    let (mut f, p1) = softmin(&fx, &cy, &to_coarse(fx.ranges.len()), &gc, eps_jump);
+    let (mut g, p2) = softmin(&fy, &cx, &to_coarse(fy.ranges.len()), &fc, eps_jump);
     lp.pairs += p1 + p2;
 
-    // Fine phase: truncated symmetric updates down the rest of the schedule.
+    // Fine phase: truncated updates down the rest of the schedule.
     for &eps in &eps_list[k..] {
         let sup = lp.support(&f, &g, eps);
-        lp.symmetric_step(&fx, &fy, &sup, &mut f, &mut g, eps);
+        lp.step(&fx, &fy, &sup, &mut f, &mut g, eps);
     }
 
-    // Polish: alternating updates at the final ε until the source marginal is within tolerance.
+    // Polish: over-relaxed updates at the final ε until the source marginal is within tolerance.
     let eps = settings.blur * settings.blur;
+    let mut omega = settings.overrelaxation;
     let mut support = lp.support(&f, &g, eps);
     let mut marginal_error = f64::INFINITY;
-    for _ in 0..settings.max_polish_iterations {
-        let (gn, p1) = softmin(&fy, &fx, &support.cols, &offsets(&fx.log_w, &f, eps), eps);
-        g = gn;
-        let (ft, p2) = softmin(&fx, &fy, &support.rows, &offsets(&fy.log_w, &g, eps), eps);
-        lp.pairs += p1 + p2;
-        lp.iterations += 1;
+    let mut best_error = f64::INFINITY;
+    for round in 0..settings.max_polish_iterations {
+        let (ft, pairs) = softmin(&fx, &fy, &support.rows, &g, eps);
+        lp.pairs += pairs;
         marginal_error = row_marginal_error(&f, &ft, eps);
         if marginal_error <= settings.marginal_tolerance {
             break;
         }
-        f = ft;
-        support = lp.support(&f, &g, eps);
+        // Safeguard: back off toward plain Sinkhorn (ω = 1) if the error blows up.
+        if !marginal_error.is_finite() || marginal_error > 10.0 * best_error {
+            omega = 1.0 + 0.5 * (omega - 1.0);
+        }
+        best_error = best_error.min(marginal_error);
+        relax(&mut f, &ft, omega);
+        let (gt, pairs) = softmin(&fy, &fx, &support.cols, &f, eps);
+        relax(&mut g, &gt, omega);
+        lp.pairs += pairs;
+        lp.iterations += 1;
+        if round % SUPPORT_REFRESH == SUPPORT_REFRESH - 1 {
+            support = lp.support(&f, &g, eps);
+        }
     }
+    // Leave the target marginal exact: one plain g update on the final f.
+    let (gt, pairs) = softmin(&fy, &fx, &support.cols, &f, eps);
+    lp.pairs += pairs;
+    g = gt;
     Dual { f, g, eps, support, iterations: lp.iterations, pairs: lp.pairs, marginal_error }
 }
 
+/// Polish iterations between two refreshes of the truncated support.
+const SUPPORT_REFRESH: usize = 8;
+
+/// Over-relaxed update `p ← (1 − ω) p + ω p̃` (Thibault et al. 2017; ω = 1 is plain Sinkhorn).
+fn relax(p: &mut [f64], target: &[f64], omega: f64) {
+    p.iter_mut().zip(target).for_each(|(a, &b)| *a += omega * (b - *a));
+}
+
 /// `Σ_i a_i |exp((f_i − f̃_i)/ε) − 1|` with uniform `a_i`, summed in fixed chunks for determinism.
-fn row_marginal_error(f: &[f32], ft: &[f32], eps: f64) -> f64 {
+fn row_marginal_error(f: &[f64], ft: &[f64], eps: f64) -> f64 {
     let n = f.len() as f64;
     let parts: Vec<f64> = f
         .par_chunks(4096)
         .zip(ft.par_chunks(4096))
-        .map(|(a, b)| {
-            a.iter()
-                .zip(b)
-                .map(|(&fa, &fb)| {
-                    let d = (f64::from(fa) - f64::from(fb)) / eps;
-                    if d <= 0.0 { 1.0 - f64::from(exp_nonpositive(d as f32)) } else { d.exp() - 1.0 }
-                })
-                .sum::<f64>()
-        })
+        .map(|(a, b)| a.iter().zip(b).map(|(&fa, &fb)| ((fa - fb) / eps).exp_m1().abs()).sum::<f64>())
         .collect();
     parts.iter().sum::<f64>() / n
 }
@@ -207,7 +235,7 @@ fn row_marginal_error(f: &[f32], ft: &[f32], eps: f64) -> f64 {
 /// Per-source-point barycentre `Σ_j π_ij y_j / Σ_j π_ij` and mean cost, in the clustered order.
 pub(crate) fn barycentres(x: &Clustered, y: &Clustered, dual: &Dual) -> (Vec<[f32; 5]>, Vec<f64>, u64) {
     let (fx, fy) = (Level::fine(x), Level::fine(y));
-    let h = offsets(&fy.log_w, &dual.g, dual.eps);
+    let (g32, _) = centred(&dual.g);
     let inv_eps = (1.0 / dual.eps) as f32;
     let cols = y.cloud.columns();
     let parts: Vec<(Vec<([f32; 5], f64)>, u64)> = fx
@@ -216,12 +244,13 @@ pub(crate) fn barycentres(x: &Clustered, y: &Clustered, dual: &Dual) -> (Vec<[f3
         .zip(&dual.support.rows)
         .map(|(rows, list)| {
             let mut pairs = 0;
+            let targets = merged_ranges(&fy.ranges, list);
             let out = rows
                 .clone()
                 .map(|i| {
                     let mut acc = RowSum::new();
-                    let blocks = list.iter().map(|&j| fy.ranges[j as usize].clone());
-                    pairs += stream_row::<true>(&x.cloud.point(i), cols, &h, inv_eps, blocks, &mut acc);
+                    let blocks = targets.iter().cloned();
+                    pairs += stream_row::<true>(&x.cloud.point(i), cols, &fy.log_w, &g32, inv_eps, blocks, &mut acc);
                     acc.barycentre()
                 })
                 .collect();
