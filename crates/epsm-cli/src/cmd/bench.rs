@@ -7,6 +7,9 @@ pub enum BenchCommand {
     Render(super::bench_render::RenderBenchArgs),
     /// Adjoint manifold solves per second by path type and length.
     Manifold(super::bench_manifold::ManifoldBenchArgs),
+    /// BVH build and update time and closest-hit / occlusion rays per second
+    /// on a bumpy sphere (coherent and incoherent rays, 1 and all threads).
+    Rays(super::bench_rays::RaysBenchArgs),
 }
 
 /// Runs one benchmark.
@@ -14,5 +17,6 @@ pub fn run(cmd: &BenchCommand) -> anyhow::Result<()> {
     match cmd {
         BenchCommand::Render(a) => super::bench_render::run(a),
         BenchCommand::Manifold(a) => super::bench_manifold::run(a),
+        BenchCommand::Rays(a) => super::bench_rays::run(a),
     }
 }

@@ -1,0 +1,134 @@
+//! Bottom level: one compressed wide BVH (CWBVH, obvhs) per distinct mesh,
+//! in object space, with the mesh's triangles packed for intersection and
+//! reordered by the BVH's `primitive_indices` so a leaf slot indexes them
+//! directly.
+//!
+//! Model: PLOC build with reinsertion, collapsed to an 8-wide BVH with at
+//! most three triangles per leaf (obvhs `BvhBuildParams::medium_build`).
+//! Triangles with zero `f32` area or a non-finite vertex are left out of the
+//! tree (they could never be hit) and counted.
+//!
+//! No parameters.
+
+use std::time::Duration;
+
+use glam::{UVec2, Vec3A};
+use obvhs::BvhBuildParams;
+use obvhs::aabb::Aabb;
+use obvhs::cwbvh::CwBvh;
+use obvhs::cwbvh::builder::build_cwbvh_from_tris;
+use obvhs::triangle::Triangle;
+
+use super::node::{TraceRay, intersect_node};
+use super::triangle::PackedTriangle;
+use crate::scene::Mesh;
+
+/// The closest hit found so far in one bottom-level BVH.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct SlotHit {
+    /// Leaf slot of the triangle (index into the packed triangles).
+    pub slot: u32,
+    /// Barycentric `b1`.
+    pub b1: f32,
+    /// Barycentric `b2`.
+    pub b2: f32,
+}
+
+/// One mesh's BVH and packed triangles.
+#[derive(Clone, Debug)]
+pub(crate) struct Blas {
+    bvh: CwBvh,
+    triangles: Vec<PackedTriangle>,
+    triangle_ids: Vec<u32>,
+    /// Object-space bounds of the hittable triangles.
+    pub bounds: Aabb,
+}
+
+impl Blas {
+    /// Builds the BVH of `mesh`; `None` when it has no hittable triangle.
+    pub fn build(mesh: &Mesh) -> Option<Self> {
+        let mut packed = Vec::with_capacity(mesh.len());
+        let mut ids = Vec::with_capacity(mesh.len());
+        let mut tris = Vec::with_capacity(mesh.len());
+        for tri in 0..mesh.len() as u32 {
+            let [v0, v1, v2] = mesh.triangle(tri).map(Vec3A::from);
+            if let Some(p) = PackedTriangle::new([v0, v1, v2]) {
+                packed.push(p);
+                ids.push(tri);
+                tris.push(Triangle { v0, v1, v2 });
+            }
+        }
+        if packed.is_empty() {
+            return None;
+        }
+        let bvh = build_cwbvh_from_tris(
+            &tris,
+            BvhBuildParams::medium_build(),
+            &mut Duration::default(),
+        );
+        let triangles = bvh
+            .primitive_indices
+            .iter()
+            .map(|&i| packed[i as usize])
+            .collect();
+        let triangle_ids = bvh
+            .primitive_indices
+            .iter()
+            .map(|&i| ids[i as usize])
+            .collect();
+        let bounds = tris.iter().fold(Aabb::empty(), |b, t| b.union(&t.aabb()));
+        Some(Self {
+            bvh,
+            triangles,
+            triangle_ids,
+            bounds,
+        })
+    }
+
+    /// Number of hittable triangles.
+    pub fn len(&self) -> usize {
+        self.triangle_ids.len()
+    }
+
+    /// The mesh's triangle index of a leaf slot.
+    #[inline(always)]
+    pub fn triangle_id(&self, slot: u32) -> u32 {
+        self.triangle_ids[slot as usize]
+    }
+
+    /// Approximate heap size in bytes.
+    pub fn bytes(&self) -> usize {
+        self.bvh.nodes.len() * size_of::<obvhs::cwbvh::node::CwBvhNode>()
+            + self.bvh.primitive_indices.len() * 4
+            + self.triangles.len() * size_of::<PackedTriangle>()
+            + self.triangle_ids.len() * 4
+    }
+
+    /// Traces the object-space `ray`. Without `ANY`, lowers `ray.t_max` to
+    /// each closer hit and records it in `best`; with `ANY`, stops at the
+    /// first hit. Returns whether anything was hit.
+    #[inline(always)]
+    pub fn trace<const ANY: bool>(&self, ray: &mut TraceRay, best: &mut SlotHit) -> bool {
+        let mut found = false;
+        let mut state = self.bvh.new_traversal(ray.dir);
+        let mut node;
+        obvhs::traverse!(self.bvh, node, state, intersect_node(node, ray), {
+            let slot = state.primitive_id;
+            if let Some(hit) =
+                self.triangles[slot as usize].intersect(ray.origin, ray.dir, ray.t_min, ray.t_max)
+            {
+                found = true;
+                if ANY {
+                    return true;
+                }
+                ray.t_max = hit.t;
+                *best = SlotHit {
+                    slot,
+                    b1: hit.b1,
+                    b2: hit.b2,
+                };
+            }
+        });
+        found
+    }
+}

@@ -1,0 +1,224 @@
+//! Tests of the two-level BVH against brute force, and of the `f64` hit side.
+
+mod bvh_util;
+
+use std::sync::Arc;
+
+use bvh_util::{Rng, object, random_scene, random_transform};
+use epsm_render::Ray;
+use epsm_render::bvh::Accel;
+use epsm_render::hit::{Hit, intersect_triangle_f64, surface_point_f64};
+use epsm_render::scene::{Mesh, Object};
+use glam::{DAffine3, DVec3, Vec3};
+
+/// What brute force in `f64` says about a ray: the closest hit that is
+/// certainly inside its triangle and `t` range (`strict`), and the closest
+/// hit within tolerance of them (`loose`), as `(t, object, triangle, tol)`.
+#[derive(Default)]
+struct Reference {
+    strict: Option<(f64, u32, u32)>,
+    loose: Option<(f64, f64)>,
+}
+
+/// Margin (world distance to the triangle's edges, `t` range) below which a
+/// hit counts as a tie that `f32` may decide either way.
+const MARGIN: f64 = 2e-5;
+
+/// Tolerance on `t` of a hit at `t` with `|cos|` between ray and normal.
+fn t_tol(t: f64, cos: f64, dir_len: f64) -> f64 {
+    1e-5 * t.abs().max(1.0 / dir_len) / cos.max(1e-3)
+}
+
+/// The `f64` ray test of one triangle: `(t, min edge distance, |cos|)`.
+fn reference_hit(object: &Object, tri: u32, o: DVec3, d: DVec3) -> Option<(f64, f64, f64)> {
+    let h = intersect_triangle_f64(object, tri, o, d)?;
+    let sp = surface_point_f64(object, tri, h.b1, h.b2);
+    let area2 = sp.dp_db1.cross(sp.dp_db2).length();
+    let edges = [sp.dp_db2 - sp.dp_db1, sp.dp_db2, sp.dp_db1].map(|e| area2 / e.length());
+    let bary = [1.0 - h.b1 - h.b2, h.b1, h.b2];
+    let margin = (0..3)
+        .map(|k| bary[k] * edges[k])
+        .fold(f64::INFINITY, f64::min);
+    let cos = (d.normalize().dot(sp.dp_db1.cross(sp.dp_db2) / area2)).abs();
+    (area2 > 0.0).then_some((h.t, margin, cos))
+}
+
+fn brute_force(objects: &[Object], ray: &Ray) -> Reference {
+    let (o, d) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
+    let (t_min, t_max) = (ray.t_min as f64, ray.t_max as f64);
+    let mut r = Reference::default();
+    for (id, object) in objects.iter().enumerate() {
+        for tri in 0..object.mesh.len() as u32 {
+            let Some((t, margin, cos)) = reference_hit(object, tri, o, d) else {
+                continue;
+            };
+            let tol = t_tol(t, cos, d.length());
+            if margin >= -MARGIN
+                && t >= t_min - tol
+                && t <= t_max + tol
+                && r.loose.is_none_or(|l| t < l.0)
+            {
+                r.loose = Some((t, tol));
+            }
+            let certain = margin >= MARGIN && cos > 1e-2 && t >= t_min + tol && t <= t_max - tol;
+            if certain && r.strict.is_none_or(|s| t < s.0) {
+                r.strict = Some((t, id as u32, tri));
+            }
+        }
+    }
+    r
+}
+
+/// Random rays: origins inside and outside the scene, random directions
+/// (a third with zeroed components or axis-aligned), some with `t` limits
+/// and non-unit directions.
+fn random_ray(rng: &mut Rng, lo: DVec3, hi: DVec3) -> Ray {
+    let centre = 0.5 * (lo + hi);
+    let radius = 0.5 * (hi - lo).length();
+    let inside = lo + (hi - lo) * rng.dvec3(0.0, 1.0);
+    let (origin, mut dir) = if rng.below(2) == 0 {
+        (inside, rng.unit())
+    } else {
+        let o = centre + 2.0 * radius * rng.unit();
+        (o, (inside - o).normalize())
+    };
+    match rng.below(6) {
+        0 => dir[rng.below(3)] = 0.0,
+        1 => {
+            let keep = rng.below(3);
+            dir = DVec3::ZERO;
+            dir[keep] = if rng.below(2) == 0 { 1.0 } else { -1.0 };
+        }
+        _ => {}
+    }
+    let mut ray = Ray::new(origin.as_vec3(), (dir * rng.range(0.3, 3.0)).as_vec3());
+    if rng.below(4) == 0 {
+        ray.t_min = rng.range(0.0, radius) as f32;
+        ray.t_max = ray.t_min + rng.range(0.0, 2.0 * radius) as f32;
+    }
+    ray
+}
+
+/// Checks `closest_hit` and `occluded` against brute force on `n` rays;
+/// returns the number of rays with a certain hit.
+fn check_against_brute_force(rng: &mut Rng, objects: &[Object], accel: &Accel, n: usize) -> usize {
+    let (lo, hi) = accel.world_bounds().expect("scene has geometry");
+    let (mut certain, mut exact, mut hits) = (0, 0, 0);
+    for i in 0..n {
+        let ray = random_ray(rng, lo, hi);
+        let reference = brute_force(objects, &ray);
+        let hit = accel.closest_hit(&ray);
+        assert_eq!(
+            accel.occluded(&ray),
+            hit.is_some(),
+            "ray {i}: occluded disagrees with closest_hit: {ray:?}"
+        );
+        if let Some((t, object, triangle)) = reference.strict {
+            certain += 1;
+            let h =
+                hit.unwrap_or_else(|| panic!("ray {i}: missed certain hit at t = {t}: {ray:?}"));
+            let tol = t_tol(t, 1.0, ray.dir.as_dvec3().length());
+            assert!(
+                (h.t as f64) <= t + tol + 1e-5 * t,
+                "ray {i}: hit {h:?} beyond certain t = {t}"
+            );
+            exact += usize::from(h.object == object && h.triangle == triangle);
+        }
+        if let Some(h) = hit {
+            hits += 1;
+            verify_hit(objects, &ray, &h, i);
+            let (t_loose, tol) = reference
+                .loose
+                .expect("a hit must be a loose reference hit");
+            assert!(
+                (h.t as f64) >= t_loose - tol,
+                "ray {i}: hit {h:?} before closest t = {t_loose}"
+            );
+        }
+    }
+    eprintln!("{n} rays: {hits} hits, {certain} certain, {exact} exact");
+    assert!(
+        exact * 100 >= certain * 98,
+        "{exact} of {certain} certain hits on the same triangle"
+    );
+    certain
+}
+
+/// The reported triangle is really hit at the reported `t` and barycentrics.
+fn verify_hit(objects: &[Object], ray: &Ray, h: &Hit, i: usize) {
+    let object = &objects[h.object as usize];
+    let (o, d) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
+    let (t, margin, cos) =
+        reference_hit(object, h.triangle, o, d).expect("reported triangle is hittable");
+    let tol = t_tol(t, cos, d.length());
+    assert!(
+        margin >= -MARGIN,
+        "ray {i}: {h:?} lies outside its triangle by {margin}"
+    );
+    assert!(
+        (h.t as f64 - t).abs() <= tol,
+        "ray {i}: {h:?} t differs from f64 t = {t}"
+    );
+    assert!(h.b1.is_finite() && h.b2.is_finite() && h.t >= ray.t_min && h.t <= ray.t_max);
+}
+
+#[test]
+fn random_scenes_match_brute_force() {
+    let mut rng = Rng(7);
+    let mut certain = 0;
+    for _ in 0..4 {
+        let objects = random_scene(&mut rng);
+        let accel = Accel::build(&objects);
+        certain += check_against_brute_force(&mut rng, &objects, &accel, 2000);
+    }
+    eprintln!("certain hits: {certain}");
+    assert!(
+        certain > 1000,
+        "too few certain hits to be a test: {certain}"
+    );
+}
+
+#[test]
+fn moved_instances_match_brute_force_without_new_blas() {
+    let mut rng = Rng(11);
+    let mut objects = random_scene(&mut rng);
+    let mut accel = Accel::build(&objects);
+    let before = accel.stats();
+    for round in 0..3 {
+        for id in [0, 2, 4 + round % 2] {
+            objects[id].world_from_object = random_transform(&mut rng, round == 1);
+            accel.update_instance(&objects, id as u32);
+        }
+        check_against_brute_force(&mut rng, &objects, &accel, 800);
+    }
+    let after = accel.stats();
+    assert_eq!(
+        (after.blas_count, after.triangles),
+        (before.blas_count, before.triangles)
+    );
+    assert_eq!(
+        after.build_seconds, before.build_seconds,
+        "update must not rebuild"
+    );
+}
+
+#[test]
+fn shared_meshes_share_blas_and_empty_meshes_are_skipped() {
+    let mut rng = Rng(3);
+    let objects = random_scene(&mut rng);
+    let stats = Accel::build(&objects).stats();
+    assert_eq!(stats.blas_count, 3);
+    assert_eq!(stats.objects, 6);
+    // soup(200) and soup(20) have 50 and 6 repeated-vertex or collinear triangles.
+    assert_eq!(stats.degenerate_triangles, 56);
+    assert_eq!(stats.triangles, 200 + 20 + 72 - 56);
+    assert!(stats.bytes > 0);
+    let empty = Accel::build(&[object(
+        "e".into(),
+        &Arc::new(Mesh::default()),
+        DAffine3::IDENTITY,
+    )]);
+    assert!(empty.world_bounds().is_none());
+    assert!(empty.closest_hit(&Ray::new(Vec3::ZERO, Vec3::X)).is_none());
+    assert!(!empty.occluded(&Ray::new(Vec3::ZERO, Vec3::X)));
+}
