@@ -3,7 +3,7 @@
 //! The first diffuse vertex `D` of a caustic path camera → D → S⁺ → L keeps
 //! receiving light from the same direction in its own transported frame; `c`
 //! is the value at the base configuration. The alternative, "the last chain
-//! segment toward the light keeps its world direction" ([`segment`], tests
+//! segment toward the light keeps its world direction" (`segment`, tests
 //! only), gives the same `dp/dθ` when the light moves or the receiver
 //! translates (a fixed specular chain maps the direction at one end one to
 //! one onto the direction at the other), and a different one when the
