@@ -67,7 +67,10 @@ pub struct PixelJacobian {
     pub columns: Vec<DVec2>,
 }
 
-/// A factored `A` that passed the pivot and condition checks.
+/// A factored `A` that passed the pivot and condition checks. The inverse is
+/// formed explicitly: it gives the exact `‖A⁻¹‖₁` and the adjoint solve
+/// `λ = A⁻ᵀ r`; at these sizes (2k ≤ 20) that measured faster than transposed
+/// LU solves with a Hager–Higham estimate of `‖A⁻¹‖₁`.
 pub(crate) struct Factored {
     lu: nalgebra::linalg::FullPivLU<f64, nalgebra::Dyn, nalgebra::Dyn>,
     inverse: DMatrix<f64>,
