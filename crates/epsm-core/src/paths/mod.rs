@@ -193,12 +193,21 @@ pub fn classify(record: &PathRecord, scene: &Scene, motion: &Motion) -> Classifi
             .map_or(v.len(), |i| i + 1);
         let verts: Vec<usize> = (0..m).collect();
         if m > 1 && m < v.len() && emissive(m) {
-            tracked += v[m].contribution;
+            // The light's emission: its vertex's contribution less the
+            // next-event estimates made there.
+            let emitted = v[m].contribution
+                - record
+                    .connections
+                    .iter()
+                    .filter(|c| c.vertex as usize == m)
+                    .map(|c| c.contribution)
+                    .sum::<Vec3>();
+            tracked += emitted;
             push(
                 PathKind::Caustic,
                 &verts,
                 Some(End::Vertex(m)),
-                v[m].contribution,
+                emitted,
                 &mut out,
             );
         }
