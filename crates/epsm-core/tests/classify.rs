@@ -115,3 +115,45 @@ fn background_endings_are_counted_and_untouched_paths_are_not_returned() {
         vec![PathKind::Primary]
     );
 }
+
+#[test]
+fn a_path_carries_only_the_parameters_of_what_it_touches() {
+    let mut rng = Rng(11);
+    let mut s = loop {
+        if let Some(s) = build(
+            &Spec::new(PathKind::ChainToSurface, vec![Vertex::Mirror], End::Surface),
+            &mut rng,
+        ) {
+            break s;
+        }
+    };
+    // Every axis of every object and the camera yaw are bound; the primary
+    // path touches one object, the chain three.
+    for name in &s.objects {
+        for axis in ["x", "y", "z"] {
+            s.table
+                .add(&format!("{name}.translate.{axis}"))
+                .expect("valid key");
+        }
+    }
+    s.table.add("camera.yaw").expect("valid key");
+    let motion = s.table.motion(&s.table.values());
+    for p in classify(&s.record, &s.scene, &motion).paths {
+        let objects: std::collections::BTreeSet<u32> = p
+            .nodes
+            .iter()
+            .filter_map(|n| match n {
+                Node::Surface { anchor, .. } => Some(anchor.object),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(p.params.len(), 3 * objects.len() + 1, "{}", p.kind.name());
+        for &param in &p.params {
+            let key = &s.table.params()[param].key;
+            assert!(
+                key == "camera.yaw" || objects.iter().any(|o| key.starts_with(&format!("o{o}."))),
+                "{key}"
+            );
+        }
+    }
+}
