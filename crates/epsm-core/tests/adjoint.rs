@@ -42,7 +42,7 @@ fn adjoint_equals_forward_for_random_loss_gradients_on_every_path_type() {
         };
         random_params(&mut s.table, &s.objects, &s.lights, &mut rng);
         let motion = s.table.motion(&s.table.values());
-        for p in classify(&s.record, &s.scene, &motion).paths {
+        for p in classify(&s.record, &s.scene, &motion, &settings).paths {
             let g = DVec2::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
             let (Ok(adj), Ok(fwd)) = (
                 solve_adjoint(&p, g, &motion, &settings),

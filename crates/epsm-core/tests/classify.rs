@@ -5,7 +5,7 @@ mod common;
 
 use common::{End, Rng, Spec, Vertex, build, random_params};
 use epsm_core::paths::Node;
-use epsm_core::{DropReason, PathKind, classify};
+use epsm_core::{DropReason, PathKind, SolveSettings, classify};
 use glam::Vec3;
 
 fn kinds(spec: &Spec, seed: u64) -> Vec<(PathKind, usize, usize)> {
@@ -17,7 +17,12 @@ fn kinds(spec: &Spec, seed: u64) -> Vec<(PathKind, usize, usize)> {
     };
     random_params(&mut s.table, &s.objects, &s.lights, &mut rng);
     let motion = s.table.motion(&s.table.values());
-    let c = classify(&s.record, &s.scene, &motion);
+    let c = classify(
+        &s.record,
+        &s.scene,
+        &motion,
+        &SolveSettings::for_radius(1.0),
+    );
     assert_eq!(c.skipped.total(), 0);
     c.paths
         .iter()
@@ -101,7 +106,12 @@ fn background_endings_are_counted_and_untouched_paths_are_not_returned() {
     s.record.vertices.pop();
     s.record.escaped = Vec3::ONE;
     let motion = s.table.motion(&s.table.values());
-    let c = classify(&s.record, &s.scene, &motion);
+    let c = classify(
+        &s.record,
+        &s.scene,
+        &motion,
+        &SolveSettings::for_radius(1.0),
+    );
     assert!(
         c.paths.is_empty(),
         "no parameter is bound: nothing is returned"
@@ -109,7 +119,12 @@ fn background_endings_are_counted_and_untouched_paths_are_not_returned() {
     assert_eq!(c.skipped.get(DropReason::NotDifferentiable), 1);
     s.table.add("o0.translate.x").expect("valid key");
     let motion = s.table.motion(&s.table.values());
-    let c = classify(&s.record, &s.scene, &motion);
+    let c = classify(
+        &s.record,
+        &s.scene,
+        &motion,
+        &SolveSettings::for_radius(1.0),
+    );
     assert_eq!(
         c.paths.iter().map(|p| p.kind).collect::<Vec<_>>(),
         vec![PathKind::Primary]
@@ -138,7 +153,14 @@ fn a_path_carries_only_the_parameters_of_what_it_touches() {
     }
     s.table.add("camera.yaw").expect("valid key");
     let motion = s.table.motion(&s.table.values());
-    for p in classify(&s.record, &s.scene, &motion).paths {
+    for p in classify(
+        &s.record,
+        &s.scene,
+        &motion,
+        &SolveSettings::for_radius(1.0),
+    )
+    .paths
+    {
         let objects: std::collections::BTreeSet<u32> = p
             .nodes
             .iter()

@@ -38,17 +38,17 @@ fn check_scene(name: &str, expected: &[PathKind]) {
         })
         .collect();
     let motion = table.motion(&table.values());
+    let settings = CheckSettings::for_radius(scene.radius());
     let mut paths = Vec::new();
     let mut count = [0usize; PathKind::ALL.len()];
     for record in trace_samples(&scene, &opts, &samples, RecordLevel::Full) {
-        for p in classify(&record, &scene, &motion).paths {
+        for p in classify(&record, &scene, &motion, &settings.solve).paths {
             if count[p.kind as usize] < PER_TYPE {
                 count[p.kind as usize] += 1;
                 paths.push(p);
             }
         }
     }
-    let settings = CheckSettings::for_radius(scene.radius());
     let report = check_paths(&paths, &table, &motion, &settings);
     for kind in expected {
         let r = report

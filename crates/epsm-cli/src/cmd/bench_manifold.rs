@@ -73,16 +73,16 @@ pub fn run(args: &ManifoldBenchArgs) -> anyhow::Result<()> {
             .collect();
         let records = trace_samples(&scene, &opts, &samples, RecordLevel::Full);
         let motion = table.motion(&table.values());
+        let settings = SolveSettings::for_radius(scene.radius());
         let mut groups = Groups::new();
         for record in &records {
-            for p in classify(record, &scene, &motion).paths {
+            for p in classify(record, &scene, &motion, &settings).paths {
                 groups
                     .entry((p.kind, p.nodes.len() - 1))
                     .or_default()
                     .push(p);
             }
         }
-        let settings = SolveSettings::for_radius(scene.radius());
         for ((kind, len), paths) in &groups {
             let m = super::with_threads(args.threads, || {
                 measure(paths, &motion, &settings, args.seconds)
