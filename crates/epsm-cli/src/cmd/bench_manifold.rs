@@ -7,7 +7,8 @@
 //!
 //! Each scene is traced at `--samples` random pixel samples (full records),
 //! every parameter default-bound (translations of objects, point lights and
-//! the camera), and the classified paths are grouped by type and length (the
+//! the camera); the classification itself (with each path's projection onto
+//! its manifold) is timed once, and the classified paths are grouped by type and length (the
 //! vertices after the camera, the light point included). Each group is
 //! solved in adjoint mode (`epsm_core::solve_adjoint`, one loss gradient per
 //! path) repeatedly for at least `--seconds` (small groups are cycled into
@@ -74,14 +75,44 @@ pub fn run(args: &ManifoldBenchArgs) -> anyhow::Result<()> {
         let records = trace_samples(&scene, &opts, &samples, RecordLevel::Full);
         let motion = table.motion(&table.values());
         let settings = SolveSettings::for_radius(scene.radius());
+        // Classification (with the projection onto the manifold), timed once.
+        let (start, cpu0) = (Instant::now(), cpu_seconds());
+        let classified: Vec<_> = super::with_threads(args.threads, || {
+            records
+                .par_iter()
+                .map(|r| classify(r, &scene, &motion, &settings).paths)
+                .collect()
+        })?;
+        let (wall, cpu) = (
+            start.elapsed().as_secs_f64(),
+            cpu_seconds().zip(cpu0).map(|(b, a)| b - a),
+        );
         let mut groups = Groups::new();
-        for record in &records {
-            for p in classify(record, &scene, &motion, &settings).paths {
-                groups
-                    .entry((p.kind, p.nodes.len() - 1))
-                    .or_default()
-                    .push(p);
-            }
+        for p in classified.into_iter().flatten() {
+            groups
+                .entry((p.kind, p.nodes.len() - 1))
+                .or_default()
+                .push(p);
+        }
+        let n_paths: usize = groups.values().map(Vec::len).sum();
+        let row = serde_json::json!({
+            "scene": path.display().to_string(),
+            "type": "classify",
+            "records": records.len(),
+            "paths": n_paths,
+            "records_per_s": records.len() as f64 / wall,
+            "records_per_cpu_s": cpu.filter(|c| *c > 0.0).map(|c| records.len() as f64 / c),
+        });
+        if args.json {
+            println!("{row}");
+        } else {
+            println!(
+                "{}  classify + project: {} records -> {} paths, {:.0} records/s",
+                path.display(),
+                records.len(),
+                n_paths,
+                records.len() as f64 / wall
+            );
         }
         for ((kind, len), paths) in &groups {
             let m = super::with_threads(args.threads, || {
