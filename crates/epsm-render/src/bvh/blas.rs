@@ -15,11 +15,11 @@ use std::time::Duration;
 use glam::{UVec2, Vec3A};
 use obvhs::BvhBuildParams;
 use obvhs::aabb::Aabb;
-use obvhs::cwbvh::CwBvh;
+use obvhs::cwbvh::Traversal;
 use obvhs::cwbvh::builder::build_cwbvh_from_tris;
 use obvhs::triangle::Triangle;
 
-use super::node::{TraceRay, intersect_node};
+use super::node::{TraceRay, WideBvh};
 use super::triangle::PackedTriangle;
 use crate::scene::Mesh;
 
@@ -37,7 +37,7 @@ pub(crate) struct SlotHit {
 /// One mesh's BVH and packed triangles.
 #[derive(Clone, Debug)]
 pub(crate) struct Blas {
-    bvh: CwBvh,
+    bvh: WideBvh,
     triangles: Vec<PackedTriangle>,
     triangle_ids: Vec<u32>,
     /// Object-space bounds of the hittable triangles.
@@ -78,7 +78,7 @@ impl Blas {
             .collect();
         let bounds = tris.iter().fold(Aabb::empty(), |b, t| b.union(&t.aabb()));
         Some(Self {
-            bvh,
+            bvh: WideBvh::new(&bvh),
             triangles,
             triangle_ids,
             bounds,
@@ -98,21 +98,26 @@ impl Blas {
 
     /// Approximate heap size in bytes.
     pub fn bytes(&self) -> usize {
-        self.bvh.nodes.len() * size_of::<obvhs::cwbvh::node::CwBvhNode>()
-            + self.bvh.primitive_indices.len() * 4
+        self.bvh.bytes()
             + self.triangles.len() * size_of::<PackedTriangle>()
             + self.triangle_ids.len() * 4
     }
 
-    /// Traces the object-space `ray`. Without `ANY`, lowers `ray.t_max` to
-    /// each closer hit and records it in `best`; with `ANY`, stops at the
-    /// first hit. Returns whether anything was hit.
+    /// Traces the object-space `ray` with traversal state `state` (reused
+    /// between calls: building one clears a 256-byte stack). Without `ANY`,
+    /// lowers `ray.t_max` to each closer hit and records it in `best`; with
+    /// `ANY`, stops at the first hit. Returns whether anything was hit.
     #[inline(always)]
-    pub fn trace<const ANY: bool>(&self, ray: &mut TraceRay, best: &mut SlotHit) -> bool {
+    pub fn trace<const ANY: bool>(
+        &self,
+        ray: &mut TraceRay,
+        state: &mut Traversal,
+        best: &mut SlotHit,
+    ) -> bool {
         let mut found = false;
-        let mut state = self.bvh.new_traversal(ray.dir);
+        state.reinit(ray.dir);
         let mut node;
-        obvhs::traverse!(self.bvh, node, state, intersect_node(node, ray), {
+        obvhs::traverse!(self.bvh, node, state, node.intersect(ray), {
             let slot = state.primitive_id;
             if let Some(hit) =
                 self.triangles[slot as usize].intersect(ray.origin, ray.dir, ray.t_min, ray.t_max)

@@ -21,12 +21,13 @@ use std::collections::HashMap;
 use std::time::Instant;
 
 use glam::{DVec3, UVec2, Vec3A};
+use obvhs::cwbvh::Traversal;
 
 use crate::hit::{self, Hit, SurfacePoint};
 use crate::ray::Ray;
 use crate::scene::{Mesh, Object, ObjectId};
 use blas::{Blas, SlotHit};
-use node::{TraceRay, intersect_node};
+use node::TraceRay;
 use tlas::{Instance, Tlas};
 
 /// Marks an object without an instance.
@@ -166,9 +167,10 @@ impl Accel {
         );
         let mut best = SlotHit::default();
         let mut best_instance = NO_INSTANCE;
-        let mut state = self.tlas.bvh.new_traversal(world.dir);
+        let mut state = self.tlas.bvh.traversal(&world);
+        let mut blas_state = Traversal::default();
         let mut node;
-        obvhs::traverse!(self.tlas.bvh, node, state, intersect_node(node, &world), {
+        obvhs::traverse!(self.tlas.bvh, node, state, node.intersect(&world), {
             let index = self.tlas.slots[state.primitive_id as usize];
             let instance = &self.instances[index as usize];
             if let Some(placement) = &instance.placement {
@@ -179,7 +181,11 @@ impl Accel {
                     world.t_min,
                     world.t_max,
                 );
-                if self.blases[instance.blas as usize].trace::<ANY>(&mut local, &mut best) {
+                if self.blases[instance.blas as usize].trace::<ANY>(
+                    &mut local,
+                    &mut blas_state,
+                    &mut best,
+                ) {
                     if ANY {
                         return Some(self.hit(index, best, local.t_max));
                     }

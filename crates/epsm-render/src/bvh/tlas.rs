@@ -25,9 +25,9 @@ use std::time::Duration;
 use glam::{DAffine3, DVec3, Vec3A};
 use obvhs::BvhBuildParams;
 use obvhs::aabb::Aabb;
-use obvhs::cwbvh::CwBvh;
 use obvhs::cwbvh::builder::build_cwbvh;
 
+use super::node::WideBvh;
 use crate::hit::Placement;
 use crate::scene::ObjectId;
 
@@ -95,7 +95,7 @@ impl Instance {
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Tlas {
     /// The BVH over instance boxes.
-    pub bvh: CwBvh,
+    pub bvh: WideBvh,
     /// Instance index of each leaf slot.
     pub slots: Vec<u32>,
 }
@@ -123,11 +123,14 @@ impl Tlas {
             .iter()
             .map(|&p| placed[p as usize])
             .collect();
-        Self { bvh, slots }
+        Self {
+            bvh: WideBvh::new(&bvh),
+            slots,
+        }
     }
 
     /// Approximate heap size in bytes.
     pub fn bytes(&self) -> usize {
-        self.bvh.nodes.len() * size_of::<obvhs::cwbvh::node::CwBvhNode>() + self.slots.len() * 8
+        self.bvh.bytes() + self.slots.len() * 4
     }
 }
