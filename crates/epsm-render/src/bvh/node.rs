@@ -109,14 +109,14 @@ impl WideNode {
         for child in 0..8 {
             let empty = node.is_child_empty(child);
             let aabb = node.child_aabb(child);
-            for axis in 0..3 {
-                let (lo, hi) = if empty {
+            for (axis, [lo, hi]) in planes.iter_mut().enumerate() {
+                let (min, max) = if empty {
                     (f32::INFINITY, f32::NEG_INFINITY)
                 } else {
                     (aabb.min[axis].next_down(), aabb.max[axis].next_up())
                 };
-                planes[axis][0][child / 4][child % 4] = lo;
-                planes[axis][1][child / 4][child % 4] = hi;
+                lo[child / 4][child % 4] = min;
+                hi[child / 4][child % 4] = max;
             }
         }
         Self {
