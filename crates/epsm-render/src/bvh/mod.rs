@@ -18,6 +18,8 @@ mod tlas;
 mod triangle;
 
 use std::collections::HashMap;
+use std::fmt;
+use std::sync::Arc;
 use std::time::Instant;
 
 use glam::{DVec3, UVec2, Vec3A};
@@ -52,14 +54,23 @@ pub struct AccelStats {
     pub bytes: usize,
 }
 
-/// Per-object BVHs and a top level over their instances.
-#[derive(Clone, Debug, Default)]
+/// Per-mesh BVHs and a top level over their instances. Cloning is cheap in
+/// the bottom levels (shared, immutable); `Debug` prints the statistics only.
+#[derive(Clone, Default)]
 pub struct Accel {
-    blases: Vec<Blas>,
+    blases: Vec<Arc<Blas>>,
     instances: Vec<Instance>,
     instance_of_object: Vec<u32>,
     tlas: Tlas,
     stats: AccelStats,
+}
+
+impl fmt::Debug for Accel {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Accel")
+            .field("stats", &self.stats)
+            .finish_non_exhaustive()
+    }
 }
 
 impl Accel {
@@ -71,13 +82,16 @@ impl Accel {
             ..Self::default()
         };
         let mut blas_of_mesh: HashMap<*const Mesh, Option<u32>> = HashMap::new();
+        let mut all = 0;
         for (id, object) in objects.iter().enumerate() {
             let blases = &mut accel.blases;
+            let all = &mut all;
             let blas = *blas_of_mesh
-                .entry(std::sync::Arc::as_ptr(&object.mesh))
+                .entry(Arc::as_ptr(&object.mesh))
                 .or_insert_with(|| {
+                    *all += object.mesh.len();
                     let built = Blas::build(&object.mesh)?;
-                    blases.push(built);
+                    blases.push(Arc::new(built));
                     Some(blases.len() as u32 - 1)
                 });
             if let Some(blas) = blas {
@@ -91,17 +105,7 @@ impl Accel {
                 ));
             }
         }
-        let mut unique_meshes: Vec<&Mesh> = Vec::new();
-        for object in objects {
-            if !unique_meshes
-                .iter()
-                .any(|m| std::ptr::eq(*m, &*object.mesh))
-            {
-                unique_meshes.push(&object.mesh);
-            }
-        }
-        let hittable: usize = accel.blases.iter().map(Blas::len).sum();
-        let all: usize = unique_meshes.iter().map(|m| m.len()).sum();
+        let hittable: usize = accel.blases.iter().map(|b| b.len()).sum();
         accel.stats.degenerate_triangles = all - hittable;
         accel.rebuild_tlas();
         accel.stats.build_seconds = start.elapsed().as_secs_f64();
@@ -129,8 +133,8 @@ impl Accel {
         self.stats.tlas_seconds = start.elapsed().as_secs_f64();
         self.stats.objects = self.instances.len();
         self.stats.blas_count = self.blases.len();
-        self.stats.triangles = self.blases.iter().map(Blas::len).sum();
-        self.stats.bytes = self.blases.iter().map(Blas::bytes).sum::<usize>()
+        self.stats.triangles = self.blases.iter().map(|b| b.len()).sum();
+        self.stats.bytes = self.blases.iter().map(|b| b.bytes()).sum::<usize>()
             + self.tlas.bytes()
             + self.instances.len() * size_of::<Instance>()
             + self.instance_of_object.len() * 4;
