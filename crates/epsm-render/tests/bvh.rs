@@ -240,3 +240,30 @@ fn shared_meshes_share_blas_and_empty_meshes_are_skipped() {
     assert!(empty.closest_hit(&Ray::new(Vec3::ZERO, Vec3::X)).is_none());
     assert!(!empty.occluded(&Ray::new(Vec3::ZERO, Vec3::X)));
 }
+
+#[test]
+fn closed_mesh_has_no_leaks_at_edges_and_vertices() {
+    let mut rng = Rng(17);
+    let mesh = Arc::new(bvh_util::cube_sphere(6));
+    let obj = object("s".into(), &mesh, random_transform(&mut rng, false));
+    let accel = Accel::build(std::slice::from_ref(&obj));
+    let w = obj.world_from_object;
+    let mut leaks = 0;
+    for k in 0..20_000 {
+        // Aim at a vertex or at a point on an edge from inside.
+        let [a, b, _] =
+            mesh.indices[rng.below(mesh.len())].map(|i| mesh.positions[i as usize].as_dvec3());
+        let target = if k % 2 == 0 {
+            a
+        } else {
+            a + (b - a) * rng.f64()
+        };
+        let origin = w.transform_point3(0.5 * rng.dvec3(-0.5, 0.5));
+        let ray = Ray::new(
+            origin.as_vec3(),
+            (w.transform_point3(target) - origin).as_vec3(),
+        );
+        leaks += usize::from(accel.closest_hit(&ray).is_none());
+    }
+    assert_eq!(leaks, 0, "rays escaped through edges or vertices");
+}

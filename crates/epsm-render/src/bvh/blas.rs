@@ -119,8 +119,8 @@ impl Blas {
         let mut node;
         obvhs::traverse!(self.bvh, node, state, node.intersect(ray), {
             let slot = state.primitive_id;
-            if let Some(hit) =
-                self.triangles[slot as usize].intersect(ray.origin, ray.dir, ray.t_min, ray.t_max)
+            if let Some(hit) = self.triangles[slot as usize]
+                .intersect(ray.origin, &ray.shear, ray.t_min, ray.t_max)
             {
                 found = true;
                 if ANY {

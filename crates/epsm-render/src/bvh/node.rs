@@ -23,6 +23,8 @@ use glam::{Vec3A, Vec4};
 use obvhs::cwbvh::node::{CwBvhNode, extract_byte64};
 use obvhs::cwbvh::{CwBvh, Traversal};
 
+use super::triangle::RayShear;
+
 /// Smallest direction magnitude used in slab tests.
 const TINY_DIR: f32 = 1e-18;
 
@@ -34,6 +36,8 @@ pub(crate) struct TraceRay {
     pub origin: Vec3A,
     /// Direction (not normalised; not clamped).
     pub dir: Vec3A,
+    /// Constants of the watertight triangle test.
+    pub shear: RayShear,
     /// Origin components, each splat over four lanes.
     origin4: [Vec4; 3],
     /// Reciprocals of the clamped direction components, splat.
@@ -74,6 +78,7 @@ impl TraceRay {
         Self {
             origin,
             dir,
+            shear: RayShear::new(dir),
             origin4: [0, 1, 2].map(|a| Vec4::splat(origin[a])),
             inv_dir4: [0, 1, 2].map(|a| Vec4::splat(inv[a])),
             near: neg.map(usize::from),
