@@ -103,11 +103,14 @@ pub fn run(args: &RaysBenchArgs) -> anyhow::Result<()> {
     let incoherent = random_rays(args.rays, lo, hi);
 
     let thread_counts = args.threads.map_or(vec![1, 2], |n| vec![n]);
+    // All pools live to the end: a thread exiting mid-measurement would take
+    // its CPU time out of the process total.
+    let pools = thread_counts
+        .iter()
+        .map(|&n| rayon::ThreadPoolBuilder::new().num_threads(n).build())
+        .collect::<Result<Vec<_>, _>>()?;
     let mut throughput = Vec::new();
-    for &threads in &thread_counts {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()?;
+    for (&threads, pool) in thread_counts.iter().zip(&pools) {
         for (name, rays) in [("coherent", &coherent), ("incoherent", &incoherent)] {
             for query in ["closest", "occluded"] {
                 let runs = (0..args.repeat.max(1))
