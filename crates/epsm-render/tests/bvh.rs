@@ -267,3 +267,25 @@ fn closed_mesh_has_no_leaks_at_edges_and_vertices() {
     }
     assert_eq!(leaks, 0, "rays escaped through edges or vertices");
 }
+
+#[test]
+fn degenerate_rays_never_hit() {
+    let mut rng = Rng(19);
+    let objects = random_scene(&mut rng);
+    let accel = Accel::build(&objects);
+    let (lo, hi) = accel.world_bounds().expect("geometry");
+    let centre = (0.5 * (lo + hi)).as_vec3();
+    for ray in [
+        Ray::new(centre, Vec3::ZERO),
+        Ray::new(Vec3::splat(f32::NAN), Vec3::X),
+        Ray::new(centre, Vec3::new(f32::NAN, 1.0, 0.0)),
+        Ray {
+            t_min: 2.0,
+            t_max: 1.0,
+            ..Ray::new(centre, Vec3::Y)
+        },
+    ] {
+        assert_eq!(accel.closest_hit(&ray), None, "{ray:?}");
+        assert!(!accel.occluded(&ray), "{ray:?}");
+    }
+}
