@@ -215,7 +215,12 @@ fn measure(accel: &Accel, rays: &[Ray], occlusion: bool) -> Run {
         })
         .sum();
     let seconds = start.elapsed().as_secs_f64();
-    let cpu_seconds = cpu_seconds().zip(cpu_start).map(|(end, start)| end - start);
+    // The kernel updates a running thread's total at scheduler ticks (a few
+    // ms), so very short runs may read zero: report nothing then.
+    let cpu_seconds = cpu_seconds()
+        .zip(cpu_start)
+        .map(|(end, start)| end - start)
+        .filter(|&c| c > 0.0);
     Run {
         seconds,
         cpu_seconds,
