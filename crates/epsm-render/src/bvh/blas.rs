@@ -66,7 +66,7 @@ impl Blas {
             BvhBuildParams::medium_build(),
             &mut Duration::default(),
         );
-        let triangles = bvh
+        let triangles: Vec<PackedTriangle> = bvh
             .primitive_indices
             .iter()
             .map(|&i| packed[i as usize])
@@ -77,8 +77,9 @@ impl Blas {
             .map(|&i| ids[i as usize])
             .collect();
         let bounds = tris.iter().fold(Aabb::empty(), |b, t| b.union(&t.aabb()));
+        let bvh = WideBvh::new(&bvh, |slot| triangles[slot as usize].aabb());
         Some(Self {
-            bvh: WideBvh::new(&bvh),
+            bvh,
             triangles,
             triangle_ids,
             bounds,

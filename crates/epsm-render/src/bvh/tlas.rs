@@ -124,7 +124,9 @@ impl Tlas {
             .map(|&p| placed[p as usize])
             .collect();
         Self {
-            bvh: WideBvh::new(&bvh),
+            bvh: WideBvh::new(&bvh, |slot| {
+                boxes[bvh.primitive_indices[slot as usize] as usize]
+            }),
             slots,
         }
     }

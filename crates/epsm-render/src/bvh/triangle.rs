@@ -20,6 +20,7 @@
 //! No parameters.
 
 use glam::{Mat3A, Vec3A};
+use obvhs::aabb::Aabb;
 
 /// Per-ray constants of the watertight test: the shear as a matrix whose rows
 /// are `e_kx − Sx·e_kz`, `e_ky − Sy·e_kz` and `Sz·e_kz` (its products with 0
@@ -80,6 +81,11 @@ impl PackedTriangle {
         let n = (p[1] - p[0]).cross(p[2] - p[0]);
         let finite = p.iter().all(|v| v.is_finite()) && n.is_finite();
         (finite && n != Vec3A::ZERO).then_some(Self { p })
+    }
+
+    /// The triangle's bounding box.
+    pub fn aabb(&self) -> Aabb {
+        Aabb::from_points(&self.p)
     }
 
     /// The hit of the ray `origin + t·dir` (`dir` given by its `shear`) with
