@@ -113,17 +113,24 @@ impl Accel {
     }
 
     /// Re-reads object `id`'s transform and rebuilds the top level (no
-    /// bottom-level BVH is touched). Ids without an instance are ignored.
+    /// bottom-level BVH is touched). Ids without an instance are ignored. The
+    /// object's mesh must be the one the BVH was built with.
     pub fn update_instance(&mut self, objects: &[Object], id: ObjectId) {
-        let Some(&index) = self.instance_of_object.get(id as usize) else {
-            return;
-        };
-        if index == NO_INSTANCE {
-            return;
+        self.update_instances(objects, &[id]);
+    }
+
+    /// [`Accel::update_instance`] for several objects with one top-level
+    /// rebuild (moving many objects at once costs one rebuild, not one each).
+    pub fn update_instances(&mut self, objects: &[Object], ids: &[ObjectId]) {
+        for &id in ids {
+            let Some(&index) = self.instance_of_object.get(id as usize) else {
+                continue;
+            };
+            if let Some(instance) = self.instances.get_mut(index as usize) {
+                let local = &self.blases[instance.blas as usize].bounds;
+                instance.place(local, &objects[id as usize].world_from_object);
+            }
         }
-        let instance = &mut self.instances[index as usize];
-        let local = &self.blases[instance.blas as usize].bounds;
-        instance.place(local, &objects[id as usize].world_from_object);
         self.rebuild_tlas();
     }
 

@@ -12,11 +12,12 @@
 //! |---|---|---|---|
 //! | 10 | 5 µs | 0.7 µs | 2 µs |
 //! | 100 | 15 µs | 0.2 µs | 9 µs |
-//! | 1000 | 0.27 ms | 0.4 µs | 0.09 ms |
+//! | 1000 | 0.3–1 ms | 0.4 µs | 0.09 ms |
 //!
 //! All are negligible next to rendering a frame, and only the rebuild keeps
 //! the tree as good as a fresh build as objects move (a refit's boxes grow
-//! and overlap), so the top level is rebuilt.
+//! and overlap), so the top level is rebuilt; moving many objects at once
+//! goes through `Accel::update_instances` for a single rebuild.
 //!
 //! No parameters.
 
