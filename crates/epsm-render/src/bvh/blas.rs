@@ -7,8 +7,9 @@
 //! at most three triangles per leaf (obvhs `BvhBuildParams::very_fast_build`).
 //! Instructions per ray (callgrind) against the other presets: on the
 //! bench's bumpy sphere `very_fast` 322 M per 200 k rays, `fastest` 327 M,
-//! `fast` 339 M, `medium` 338 M, `slow` without splits 349 M, `slow` 353 M (and
-//! twice the build time); on a mixed scene (a sphere, a 5000-triangle random
+//! `medium` 338 M, `fast` 339 M, `slow` without spatial splits 349 M (`slow`
+//! with them: 3 % more than `medium`, and twice its build time); on a mixed
+//! scene (a sphere, a 5000-triangle random
 //! soup and a height field) `very_fast` 1.4 % fewer than `medium`, with fewer
 //! cache misses. The more thorough presets optimise the binary tree's SAH,
 //! which the 8-wide collapse does not preserve.
