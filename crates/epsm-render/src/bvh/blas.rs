@@ -9,10 +9,11 @@
 //! bench's bumpy sphere `very_fast` 322 M per 200 k rays, `fastest` 327 M,
 //! `medium` 338 M, `fast` 339 M, `slow` without spatial splits 349 M (`slow`
 //! with them: 3 % more than `medium`, and twice its build time); on a mixed
-//! scene (a sphere, a 5000-triangle random
-//! soup and a height field) `very_fast` 1.4 % fewer than `medium`, with fewer
-//! cache misses. The more thorough presets optimise the binary tree's SAH,
-//! which the 8-wide collapse does not preserve.
+//! scene (a sphere, a 5000-triangle random soup and a height field)
+//! `very_fast` 1.4 % fewer than `medium`, with fewer cache misses. The more
+//! thorough presets optimise the binary tree's SAH, which the 8-wide collapse
+//! does not preserve.
+//!
 //! Triangles with zero `f32` area or a non-finite vertex are left out of the
 //! tree (they could never be hit) and counted.
 //!
