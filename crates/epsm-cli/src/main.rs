@@ -1,36 +1,44 @@
-//! The epsm command-line tool.
+//! `epsm`: the command-line front end of the epsm differentiable renderer.
+//!
+//! Every command is documented in `docs/cli.md`; `epsm <command> --help`
+//! prints the same flags.
 
 mod cmd;
+mod progress;
+
+use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
-/// epsm: differentiable rendering with extended path space manifolds.
-#[derive(Parser)]
-#[command(name = "epsm", version)]
+/// epsm — a CPU, pure-Rust, physically based differentiable renderer
+/// (extended path space manifolds + optimal-transport loss).
+#[derive(Parser, Debug)]
+#[command(name = "epsm", version, about, long_about = None, propagate_version = true)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
 }
 
-#[derive(Subcommand)]
+#[derive(Subcommand, Debug)]
 enum Command {
-    /// Benchmarks.
-    Bench {
-        #[command(subcommand)]
-        what: Bench,
-    },
+    /// Render a scene file to an EXR (linear) or PNG (sRGB) image.
+    Render(cmd::render::RenderArgs),
+    /// Measure performance (renderer, BVH, matching) and print the numbers.
+    #[command(subcommand)]
+    Bench(cmd::bench::BenchCommand),
 }
 
-#[derive(Subcommand)]
-enum Bench {
-    /// Ray tracing throughput of the BVH on a bumpy sphere.
-    Rays(cmd::bench_rays::RaysBenchArgs),
-}
-
-fn main() -> anyhow::Result<()> {
-    match Cli::parse().command {
-        Command::Bench {
-            what: Bench::Rays(args),
-        } => cmd::bench_rays::run(&args),
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match &cli.command {
+        Command::Render(args) => cmd::render::run(args),
+        Command::Bench(b) => cmd::bench::run(b),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(err) => {
+            eprintln!("error: {err:#}");
+            ExitCode::FAILURE
+        }
     }
 }

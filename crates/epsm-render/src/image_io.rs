@@ -1,1 +1,290 @@
-//! image_io
+//! Reading and writing linear-RGB [`Image`]s.
+//!
+//! | format | read | write |
+//! |---|---|---|
+//! | `.png` | 8- or 16-bit, decoded from sRGB to linear; alpha ignored | 8-bit RGB, values clamped to [0, 1] and sRGB-encoded; non-finite → 0 |
+//! | `.exr` | first RGB(A) layer, linear; alpha ignored | 32-bit float RGB, exact (non-finite values kept) |
+//!
+//! The format is chosen by the (case-insensitive) extension; anything else is
+//! an error. Writes are atomic: the image goes to a temporary file in the
+//! target's directory which is then renamed over the target, so a reader
+//! never sees a half-written file and a failed write leaves nothing behind.
+//! sRGB transfer functions follow IEC 61966-2-1.
+
+use std::io::{BufWriter, Write};
+use std::path::Path;
+
+use glam::Vec3;
+use image::ImageEncoder;
+
+use crate::error::{Error, Result};
+use crate::film::Image;
+
+/// The image formats this module reads and writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Format {
+    Png,
+    Exr,
+}
+
+fn format_of(path: &Path) -> Result<Format> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    match ext.as_deref() {
+        Some("png") => Ok(Format::Png),
+        Some("exr") => Ok(Format::Exr),
+        _ => Err(image_error(
+            path,
+            "unsupported image format: expected .png or .exr",
+        )),
+    }
+}
+
+fn image_error(path: &Path, message: impl std::fmt::Display) -> Error {
+    Error::Image {
+        path: path.to_owned(),
+        message: message.to_string(),
+    }
+}
+
+/// Whether `path`'s extension names a format this module reads and writes.
+pub fn is_supported(path: &Path) -> bool {
+    format_of(path).is_ok()
+}
+
+/// Reads a PNG (sRGB → linear) or EXR (linear) file as linear RGB.
+pub fn read_image(path: &Path) -> Result<Image> {
+    match format_of(path)? {
+        Format::Png => read_png(path),
+        Format::Exr => read_exr(path),
+    }
+}
+
+/// Writes `img` as PNG (sRGB, 8-bit, clamped) or EXR (32-bit float RGB),
+/// chosen by `path`'s extension, atomically. The directory must exist.
+pub fn write_image(path: &Path, img: &Image) -> Result<()> {
+    let format = format_of(path)?;
+    if img.pixels.len() != img.width as usize * img.height as usize || img.pixels.is_empty() {
+        return Err(image_error(
+            path,
+            "image has no pixels or a wrong pixel count",
+        ));
+    }
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let io = |source| Error::Io {
+        path: path.to_owned(),
+        source,
+    };
+    let mut tmp = tempfile::Builder::new()
+        .prefix(".epsm-")
+        .suffix(".tmp")
+        .tempfile_in(dir)
+        .map_err(io)?;
+    match format {
+        Format::Png => write_png(path, img, BufWriter::new(tmp.as_file_mut()))?,
+        Format::Exr => write_exr(path, img, BufWriter::new(tmp.as_file_mut()))?,
+    }
+    tmp.as_file().sync_all().map_err(io)?;
+    tmp.persist(path).map_err(|e| io(e.error))?;
+    Ok(())
+}
+
+/// sRGB-encoded value in [0, 1] → linear.
+pub fn srgb_to_linear(v: f32) -> f32 {
+    if v <= 0.04045 {
+        v / 12.92
+    } else {
+        ((v + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// Linear value → sRGB-encoded, clamped to [0, 1]; non-finite values map to 0.
+pub fn linear_to_srgb(v: f32) -> f32 {
+    let v = if v.is_finite() {
+        v.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    if v <= 0.0031308 {
+        v * 12.92
+    } else {
+        1.055 * v.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+fn read_png(path: &Path) -> Result<Image> {
+    let file = std::fs::File::open(path).map_err(|source| Error::Io {
+        path: path.to_owned(),
+        source,
+    })?;
+    let decoded = image::load(std::io::BufReader::new(file), image::ImageFormat::Png)
+        .map_err(|e| image_error(path, e))?
+        .into_rgb32f();
+    let (width, height) = decoded.dimensions();
+    let pixels = decoded
+        .pixels()
+        .map(|p| Vec3::from_array(p.0.map(srgb_to_linear)))
+        .collect();
+    Ok(Image {
+        width,
+        height,
+        pixels,
+    })
+}
+
+fn write_png(path: &Path, img: &Image, out: impl Write) -> Result<()> {
+    let bytes: Vec<u8> = img
+        .pixels
+        .iter()
+        .flat_map(|p| p.to_array())
+        .map(|v| (linear_to_srgb(v) * 255.0).round() as u8)
+        .collect();
+    image::codecs::png::PngEncoder::new(out)
+        .write_image(
+            &bytes,
+            img.width,
+            img.height,
+            image::ExtendedColorType::Rgb8,
+        )
+        .map_err(|e| image_error(path, e))
+}
+
+fn read_exr(path: &Path) -> Result<Image> {
+    let read = exr::prelude::read_first_rgba_layer_from_file(
+        path,
+        |size, _| Image::new(size.width() as u32, size.height() as u32),
+        |img: &mut Image, pos: exr::math::Vec2<usize>, (r, g, b, _a): (f32, f32, f32, f32)| {
+            img.set(pos.x() as u32, pos.y() as u32, Vec3::new(r, g, b));
+        },
+    )
+    .map_err(|e| image_error(path, e))?;
+    Ok(read.layer_data.channel_data.pixels)
+}
+
+fn write_exr(path: &Path, img: &Image, mut out: impl Write + std::io::Seek) -> Result<()> {
+    use exr::prelude::WritableImage;
+    let size = (img.width as usize, img.height as usize);
+    let channels = exr::image::SpecificChannels::rgb(|pos: exr::math::Vec2<usize>| {
+        let p = img.get(pos.x() as u32, pos.y() as u32);
+        (p.x, p.y, p.z)
+    });
+    exr::image::Image::from_channels(size, channels)
+        .write()
+        .to_buffered(&mut out)
+        .map_err(|e| image_error(path, e))?;
+    out.flush().map_err(|source| Error::Io {
+        path: path.to_owned(),
+        source,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn test_image() -> Image {
+        let mut img = Image::new(5, 3);
+        for y in 0..3 {
+            for x in 0..5 {
+                let v = Vec3::new(x as f32 / 4.0, y as f32 / 2.0, 0.3 * (x + y) as f32 / 6.0);
+                img.set(x, y, v);
+            }
+        }
+        img
+    }
+
+    #[test]
+    fn png_round_trip_is_within_one_step_of_eight_bit_srgb() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let path = dir.path().join("a.png");
+        let img = test_image();
+        write_image(&path, &img).expect("write png");
+        let back = read_image(&path).expect("read png");
+        assert_eq!((back.width, back.height), (5, 3));
+        for (a, b) in img.pixels.iter().zip(&back.pixels) {
+            for c in 0..3 {
+                let (ea, eb) = (linear_to_srgb(a[c]), linear_to_srgb(b[c]));
+                assert!((ea - eb).abs() <= 0.5 / 255.0 + 1e-6, "{a} vs {b}");
+            }
+        }
+        // Row 0 is the top row in both.
+        assert_eq!(back.get(0, 0), Vec3::ZERO);
+        assert!(back.get(4, 2).x > 0.99);
+    }
+
+    #[test]
+    fn png_clamps_and_maps_non_finite_to_zero() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let path = dir.path().join("b.png");
+        let mut img = Image::new(2, 1);
+        img.set(0, 0, Vec3::new(f32::NAN, f32::INFINITY, -3.0));
+        img.set(1, 0, Vec3::new(7.0, 1.0, 0.5));
+        write_image(&path, &img).expect("write png");
+        let back = read_image(&path).expect("read png");
+        assert_eq!(back.get(0, 0), Vec3::ZERO);
+        assert_eq!(back.get(1, 0).x, 1.0);
+        assert!((back.get(1, 0).z - 0.5).abs() < 0.01);
+    }
+
+    #[test]
+    fn exr_round_trip_is_exact_including_non_finite() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let path = dir.path().join("c.exr");
+        let mut img = test_image();
+        img.set(1, 1, Vec3::new(1e6, -2.5, f32::INFINITY));
+        write_image(&path, &img).expect("write exr");
+        let back = read_image(&path).expect("read exr");
+        assert_eq!(back, img);
+    }
+
+    #[test]
+    fn alpha_channels_are_ignored_on_read() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let png = dir.path().join("rgba.png");
+        let file = std::fs::File::create(&png).expect("create");
+        image::codecs::png::PngEncoder::new(file)
+            .write_image(&[255, 0, 188, 7], 1, 1, image::ExtendedColorType::Rgba8)
+            .expect("encode");
+        let px = read_image(&png).expect("read rgba png").get(0, 0);
+        assert!(
+            (px.x - 1.0).abs() < 1e-6 && px.y == 0.0 && (px.z - 0.5).abs() < 0.003,
+            "{px}"
+        );
+        let exr = dir.path().join("rgba.exr");
+        exr::prelude::write_rgba_file(&exr, 2, 1, |x, _| (x as f32, 2.0, 3.0, 0.25))
+            .expect("encode");
+        let img = read_image(&exr).expect("read rgba exr");
+        assert_eq!(
+            img.pixels,
+            vec![Vec3::new(0.0, 2.0, 3.0), Vec3::new(1.0, 2.0, 3.0)]
+        );
+    }
+
+    #[test]
+    fn atomic_write_replaces_the_file_and_leaves_no_temporary_behind() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let path = dir.path().join("d.exr");
+        std::fs::write(&path, b"old").expect("seed");
+        write_image(&path, &test_image()).expect("write exr");
+        let names: Vec<_> = std::fs::read_dir(dir.path())
+            .expect("list")
+            .map(|e| e.expect("entry").file_name())
+            .collect();
+        assert_eq!(names, vec![std::ffi::OsString::from("d.exr")]);
+        assert_eq!(read_image(&path).expect("read"), test_image());
+    }
+
+    #[test]
+    fn unknown_extensions_are_rejected_and_nothing_is_written() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let path = dir.path().join("e.jpg");
+        assert!(write_image(&path, &test_image()).is_err());
+        assert!(read_image(&path).is_err());
+        assert_eq!(std::fs::read_dir(dir.path()).expect("list").count(), 0);
+    }
+}

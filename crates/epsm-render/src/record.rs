@@ -1,1 +1,128 @@
-//! record
+//! Path records: what the differentiation side (`epsm-core`) needs to know
+//! about a traced path, and nothing more.
+//!
+//! A caller picks a [`RecordLevel`] so that scenes pay only for what they
+//! need. Recording observes the tracer: it never changes the random numbers
+//! consumed or the radiance computed (the only extra work is a closest-hit
+//! query on blocked shadow rays, to name the first occluder).
+
+use glam::{UVec2, Vec2, Vec3};
+
+use crate::lights::LightPoint;
+use crate::materials::{Lobe, VertexKind};
+use crate::scene::ObjectId;
+
+/// How much of each path to record.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum RecordLevel {
+    /// The first surface vertex only (primary visibility: silhouettes, layout).
+    Primary,
+    /// Vertices up to and including the first diffuse vertex, and the
+    /// next-event connections made at them (chains to surfaces and lights,
+    /// shadows at the first diffuse vertex).
+    FirstDiffuse,
+    /// Every vertex and connection (caustics: camera → D → S⁺ → L).
+    Full,
+}
+
+/// Where a point lies on a triangle of an object.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TrianglePoint {
+    /// The object.
+    pub object: ObjectId,
+    /// Triangle index within the object's mesh.
+    pub triangle: u32,
+    /// Barycentric `b1`.
+    pub b1: f32,
+    /// Barycentric `b2`.
+    pub b2: f32,
+}
+
+/// One surface vertex of a path (`x1`, `x2`, …; the camera is `x0`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VertexRecord {
+    /// Object, triangle and local coordinates.
+    pub at: TrianglePoint,
+    /// Position, world space.
+    pub p: Vec3,
+    /// Unit geometric normal, world space.
+    pub ng: Vec3,
+    /// Unit shading normal, world space.
+    pub ns: Vec3,
+    /// The kind of manifold vertex the material makes.
+    pub kind: VertexKind,
+    /// The lobe sampled to continue the path; `None` when the path ended here
+    /// (absorbed, Russian roulette, max depth, or an emitter with no BSDF
+    /// continuation recorded).
+    pub lobe: Option<Lobe>,
+    /// Relative IOR `η(wo side)/η(wi side)` of the sampled lobe (1 for reflection).
+    pub eta: f32,
+    /// Sampled microfacet normal, world space (the shading normal for smooth
+    /// and diffuse lobes).
+    pub m: Vec3,
+    /// Path throughput arriving at this vertex (before its BSDF).
+    pub throughput: Vec3,
+    /// Radiance this vertex added to the pixel sample: its emission hit by
+    /// BSDF sampling (MIS-weighted) and its next-event contributions.
+    pub contribution: Vec3,
+}
+
+/// A next-event-estimation connection from a path vertex to a light.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ConnectionRecord {
+    /// Index into [`PathRecord::vertices`] of the vertex that connected.
+    pub vertex: u32,
+    /// The light point.
+    pub light: LightPoint,
+    /// Light position, world space (for the background: the unit direction).
+    pub light_position: Vec3,
+    /// Light normal (zero for point lights and the background).
+    pub light_normal: Vec3,
+    /// The radiance the connection added (zero when blocked).
+    pub contribution: Vec3,
+    /// What the contribution would have been if the ray were unblocked: the
+    /// shadow's strength.
+    pub unoccluded: Vec3,
+    /// The first occluder when the shadow ray was blocked.
+    pub occluder: Option<OccluderRecord>,
+}
+
+/// The first surface that blocked a shadow ray.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OccluderRecord {
+    /// Object, triangle and local coordinates.
+    pub at: TrianglePoint,
+    /// Position, world space.
+    pub p: Vec3,
+}
+
+/// A recorded path for one pixel sample.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PathRecord {
+    /// The pixel.
+    pub pixel: UVec2,
+    /// The sample index within the pixel.
+    pub sample: u32,
+    /// Film position of the camera ray (pixels).
+    pub film: Vec2,
+    /// Surface vertices in path order.
+    pub vertices: Vec<VertexRecord>,
+    /// Next-event connections.
+    pub connections: Vec<ConnectionRecord>,
+    /// Radiance of rays that left the scene (background), MIS-weighted.
+    pub escaped: Vec3,
+    /// The sample's total radiance (what the image accumulates).
+    pub radiance: Vec3,
+}
+
+impl PathRecord {
+    /// Whether the path touches object `id` at a recorded vertex, light point
+    /// or occluder.
+    pub fn touches(&self, id: ObjectId) -> bool {
+        self.vertices.iter().any(|v| v.at.object == id)
+            || self.connections.iter().any(|c| {
+                matches!(c.light, LightPoint::Area { object, .. } if object == id)
+                    || c.occluder.is_some_and(|o| o.at.object == id)
+            })
+    }
+}

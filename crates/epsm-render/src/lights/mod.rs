@@ -1,35 +1,35 @@
 //! Lights: emissive objects (area lights), point lights and the background
 //! (constant or an importance-sampled lat-long environment map), with one
 //! table that selects among them in proportion to their power.
+//!
+//! Powers used for selection ([`select`]): area light `mean(L)·A·π`, point
+//! light `4π·mean(I)`, background `π·mean(L̄)·πr²` (`L̄` the mean radiance over
+//! the sphere, `r` the radius of the scene bounds, 1 without bounds). A light of
+//! zero power is never selected. Every pdf a [`LightSample`] carries is a
+//! solid-angle density at the reference point with the selection probability
+//! included, and [`LightTable::pdf_area`] / [`LightTable::pdf_background`]
+//! return exactly that value for a given light point (for MIS).
 
+pub mod area;
+pub mod distribution;
+pub mod envmap;
+pub mod point;
+pub mod select;
+
+#[cfg(test)]
+mod tests;
+
+use std::f32::consts::PI;
 use std::sync::Arc;
 
 use glam::{DVec3, Vec2, Vec3};
 
-use crate::film::Image;
-use crate::scene::{Object, ObjectId};
+pub use area::AreaEmitter;
+pub use envmap::{DirectionSample, EnvMap};
+pub use point::PointLight;
+pub use select::LightTable;
 
-/// An isotropic point light.
-#[derive(Clone, Debug, PartialEq)]
-pub struct PointLight {
-    /// Unique name; parameters bind to it.
-    pub name: String,
-    /// Position, world space.
-    pub position: DVec3,
-    /// Radiant intensity, W·sr⁻¹ per channel.
-    pub intensity: Vec3,
-}
-
-/// A lat-long environment map.
-#[derive(Clone, Debug)]
-pub struct EnvMap {
-    /// Linear radiance image (lat-long; row 0 is straight up, `+y`).
-    pub image: Image,
-    /// Multiplier on the image.
-    pub scale: f32,
-    /// Rotation about `+y`, radians.
-    pub rotate_y: f32,
-}
+use crate::scene::ObjectId;
 
 /// What rays leaving the scene see.
 #[derive(Clone, Debug)]
@@ -68,9 +68,10 @@ pub enum LightPoint {
 pub struct LightSample {
     /// Unit direction from the reference point toward the light.
     pub wo: Vec3,
-    /// Distance to the light point (infinite for the background).
+    /// Distance to the light point (`f32::INFINITY` for the background).
     pub dist: f32,
     /// Light position, world space (reference + wo·dist for finite lights).
+    /// For the background there is no position: this holds the direction `wo`.
     pub position: Vec3,
     /// Unit light-surface normal (zero for point lights and the background).
     pub normal: Vec3,
@@ -86,54 +87,51 @@ pub struct LightSample {
     pub source: LightPoint,
 }
 
-/// Precomputed selection and sampling tables for every emitter of a scene.
-#[derive(Clone, Debug, Default)]
-pub struct LightTable {
-    _todo: (),
-}
-
-impl LightTable {
-    /// Builds the tables (world-space emissive triangles, power-proportional selection).
-    pub fn build(objects: &[Object], point_lights: &[PointLight], background: &Background) -> Self {
-        let _ = (objects, point_lights, background);
-        Self::default()
-    }
-
-    /// Whether the scene has no emitter at all.
-    pub fn is_empty(&self) -> bool {
-        true
-    }
-
-    /// Samples a light point as seen from `p`. `None` when there is no light
-    /// or the sample carries no energy.
-    pub fn sample(&self, p: Vec3, u_select: f32, u: Vec2) -> Option<LightSample> {
-        let _ = (p, u_select, u);
-        unimplemented!("lights: implemented on the lights branch")
-    }
-
-    /// Solid-angle pdf (selection included) that `sample` from `p` returns the
-    /// point `y` on triangle `triangle` of emissive object `object` with unit normal `n`.
-    pub fn pdf_area(&self, object: ObjectId, triangle: u32, p: Vec3, y: Vec3, n: Vec3) -> f32 {
-        let _ = (object, triangle, p, y, n);
-        unimplemented!("lights: implemented on the lights branch")
-    }
-
-    /// Solid-angle pdf (selection included) of sampling background direction `dir`.
-    pub fn pdf_background(&self, dir: Vec3) -> f32 {
-        let _ = dir;
-        unimplemented!("lights: implemented on the lights branch")
-    }
-}
-
 impl Background {
     /// Radiance seen along world direction `dir` (unit).
     pub fn eval(&self, dir: Vec3) -> Vec3 {
         match self {
-            Background::Constant(c) => {
-                let _ = dir;
-                *c
+            Background::Constant(c) => *c,
+            Background::EnvMap(map) => map.eval(dir),
+        }
+    }
+
+    /// Mean radiance over the sphere of directions.
+    pub fn mean_radiance(&self) -> Vec3 {
+        match self {
+            Background::Constant(c) => *c,
+            Background::EnvMap(map) => map.mean_radiance(),
+        }
+    }
+
+    /// Power estimate `π·mean(L̄)·πr²` for scene `bounds` (radius 1 without).
+    pub fn power(&self, bounds: Option<(DVec3, DVec3)>) -> f64 {
+        let r = bounds.map_or(1.0, |(lo, hi)| 0.5 * (hi - lo).length());
+        std::f64::consts::PI * area::mean(self.mean_radiance()) * std::f64::consts::PI * r * r
+    }
+
+    /// Samples a direction: uniform on the sphere for a constant background,
+    /// by luminance for an environment map. `None` when nothing can be sampled.
+    pub fn sample(&self, u: Vec2) -> Option<DirectionSample> {
+        match self {
+            Background::Constant(_) => {
+                let z = 1.0 - 2.0 * u.x;
+                let r = (1.0 - z * z).max(0.0).sqrt();
+                let phi = 2.0 * PI * u.y;
+                Some(DirectionSample {
+                    dir: Vec3::new(r * phi.cos(), r * phi.sin(), z),
+                    pdf: 1.0 / (4.0 * PI),
+                })
             }
-            Background::EnvMap(_) => unimplemented!("lights: implemented on the lights branch"),
+            Background::EnvMap(map) => map.sample(u),
+        }
+    }
+
+    /// Solid-angle density of [`Self::sample`] at `dir`.
+    pub fn pdf(&self, dir: Vec3) -> f32 {
+        match self {
+            Background::Constant(_) => 1.0 / (4.0 * PI),
+            Background::EnvMap(map) => map.pdf(dir),
         }
     }
 }

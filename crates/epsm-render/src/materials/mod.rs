@@ -2,52 +2,39 @@
 //!
 //! All functions work in the local shading frame (`+z` = shading normal) with
 //! the crate's `wi`/`wo` convention. `eval` includes `|cos θo|`.
+//!
+//! | variant | file | vertex kind | lobes |
+//! |---|---|---|---|
+//! | [`Diffuse`] | `diffuse.rs` | diffuse | cosine-weighted reflection |
+//! | [`Conductor`] | `conductor.rs` | specular | mirror reflection |
+//! | [`RoughConductor`] | `rough_conductor.rs` | glossy | GGX reflection ([`microfacet`]) |
+//! | [`Dielectric`] | `dielectric.rs` | specular | Fresnel reflection + refraction ([`fresnel`]) |
+//!
+//! Sidedness: a one-sided material (`two_sided = false`) does not scatter
+//! light arriving from behind (`wi.z ≤ 0`: `sample` is `None`, `eval` and `pdf`
+//! are 0). A two-sided material seen from behind is mirrored through the
+//! tangent plane. Reflection lobes need `wo` on the side of `wi`.
 
-use std::sync::Arc;
+pub mod conductor;
+pub mod dielectric;
+pub mod diffuse;
+pub mod fresnel;
+pub mod microfacet;
+pub mod rough_conductor;
+pub mod texture;
+
+#[cfg(test)]
+pub(crate) mod test_support;
+#[cfg(test)]
+mod tests;
 
 use glam::{Vec2, Vec3};
 
-use crate::film::Image;
-
-/// A colour that is constant or looked up in an image by texture coordinates.
-#[derive(Clone, Debug, PartialEq)]
-pub enum Texture {
-    /// The same linear RGB everywhere.
-    Constant(Vec3),
-    /// A linear-RGB image (decoded from sRGB PNG or linear EXR), bilinear, wrapping.
-    Image(Arc<Image>),
-}
-
-/// Lambertian reflection.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Diffuse {
-    /// Albedo in [0, 1] per channel.
-    pub albedo: Texture,
-}
-
-/// Smooth conductor: a perfect mirror whose Fresnel reflectance is `tint`.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Conductor {
-    /// Reflectance per channel, in [0, 1].
-    pub tint: Vec3,
-}
-
-/// Rough conductor: GGX microfacets with visible-normal sampling; Fresnel
-/// reflectance `tint` (constant over angle).
-#[derive(Clone, Debug, PartialEq)]
-pub struct RoughConductor {
-    /// GGX roughness α (isotropic), in [1e-4, 1].
-    pub alpha: f32,
-    /// Reflectance per channel, in [0, 1].
-    pub tint: Vec3,
-}
-
-/// Smooth dielectric interface (glass), exterior IOR 1.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Dielectric {
-    /// Interior index of refraction relative to the exterior (> 0, ≠ 1 in practice).
-    pub ior: f32,
-}
+pub use conductor::Conductor;
+pub use dielectric::Dielectric;
+pub use diffuse::Diffuse;
+pub use rough_conductor::RoughConductor;
+pub use texture::Texture;
 
 /// The BSDF of a material.
 #[derive(Clone, Debug, PartialEq)]
@@ -145,20 +132,89 @@ impl Material {
     /// Samples `wo` given `wi` (local), texture coordinates, one number for
     /// the lobe choice and two for the direction. `None` when the sample
     /// carries no energy (back face of a one-sided material, below horizon).
+    ///
+    /// Two-sided materials seen from the back (`wi.z < 0`) are mirrored
+    /// through the tangent plane: the returned `wo` and `m` are flipped back,
+    /// so for reflection `m = normalize(wi + wo)` lies on the side of `wi`
+    /// (`−z` for the smooth conductor and diffuse seen from the back).
+    /// Dielectrics have an inside and are never mirrored (`m = +z` always).
     pub fn sample(&self, wi: Vec3, uv: Vec2, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
-        let _ = (wi, uv, u_lobe, u);
-        unimplemented!("materials: implemented on the materials branch")
+        let side = match &self.bsdf {
+            Bsdf::Dielectric(d) => return d.sample(wi, u_lobe),
+            _ => self.side(wi)?,
+        };
+        let wi = side.apply(wi);
+        let s = match &self.bsdf {
+            Bsdf::Diffuse(d) => d.sample(uv, u),
+            Bsdf::Conductor(c) => c.sample(wi),
+            Bsdf::RoughConductor(r) => r.sample(wi, u),
+            Bsdf::Dielectric(_) => None,
+        }?;
+        Some(BsdfSample {
+            wo: side.apply(s.wo),
+            m: side.apply(s.m),
+            ..s
+        })
     }
 
-    /// `f(wi, wo)·|cos θo|` for the non-delta lobes (local directions).
+    /// `f(wi, wo)·|cos θo|` for the non-delta lobes (local directions); zero
+    /// for delta lobes, for directions in opposite hemispheres and for the
+    /// back face of one-sided materials.
     pub fn eval(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> Vec3 {
-        let _ = (wi, wo, uv);
-        unimplemented!("materials: implemented on the materials branch")
+        let Some(side) = self.side(wi) else {
+            return Vec3::ZERO;
+        };
+        let (wi, wo) = (side.apply(wi), side.apply(wo));
+        match &self.bsdf {
+            Bsdf::Diffuse(d) => d.eval(wi, wo, uv),
+            Bsdf::RoughConductor(r) => r.eval(wi, wo),
+            Bsdf::Conductor(_) | Bsdf::Dielectric(_) => Vec3::ZERO,
+        }
     }
 
-    /// Solid-angle pdf with which `sample` returns `wo` through a non-delta lobe.
-    pub fn pdf(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> f32 {
-        let _ = (wi, wo, uv);
-        unimplemented!("materials: implemented on the materials branch")
+    /// Solid-angle pdf with which `sample` returns `wo` through a non-delta
+    /// lobe (zero where `eval` is zero by construction, and for delta lobes).
+    /// No current lobe's pdf depends on the texture coordinates `_uv`.
+    pub fn pdf(&self, wi: Vec3, wo: Vec3, _uv: Vec2) -> f32 {
+        let Some(side) = self.side(wi) else {
+            return 0.0;
+        };
+        let (wi, wo) = (side.apply(wi), side.apply(wo));
+        match &self.bsdf {
+            Bsdf::Diffuse(d) => d.pdf(wi, wo),
+            Bsdf::RoughConductor(r) => r.pdf(wi, wo),
+            Bsdf::Conductor(_) | Bsdf::Dielectric(_) => 0.0,
+        }
+    }
+
+    /// Which side `wi` sees: `None` for the back of a one-sided material.
+    fn side(&self, wi: Vec3) -> Option<Side> {
+        if wi.z > 0.0 {
+            Some(Side::Front)
+        } else if wi.z < 0.0 && self.two_sided {
+            Some(Side::Back)
+        } else {
+            None
+        }
+    }
+}
+
+/// The side of the surface `wi` lies on; the back is handled by mirroring
+/// through the tangent plane.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Side {
+    Front,
+    Back,
+}
+
+impl Side {
+    /// Maps a local direction into (and, being an involution, back out of)
+    /// the front-side frame.
+    #[inline]
+    fn apply(self, w: Vec3) -> Vec3 {
+        match self {
+            Side::Front => w,
+            Side::Back => Vec3::new(w.x, w.y, -w.z),
+        }
     }
 }

@@ -7,13 +7,18 @@
 //! Moving one object with [`Scene::set_object_transform`] refits only the top
 //! level of the BVH and that object's emitter table.
 
+pub mod desc;
+pub mod import;
+pub mod load;
 pub mod mesh;
+pub mod shapes;
 
 use std::path::PathBuf;
 use std::sync::Arc;
 
 use glam::{DAffine3, DVec3, Vec3};
 
+pub use load::{load_parts, load_scene, parts_from_str};
 pub use mesh::Mesh;
 
 use crate::bvh::Accel;
@@ -105,7 +110,12 @@ impl Scene {
     /// Builds the BVHs and light tables.
     pub fn new(parts: SceneParts) -> crate::error::Result<Self> {
         let accel = Accel::build(&parts.objects);
-        let lights = LightTable::build(&parts.objects, &parts.point_lights, &parts.background);
+        let lights = LightTable::build(
+            &parts.objects,
+            &parts.point_lights,
+            &parts.background,
+            accel.world_bounds(),
+        );
         Ok(Self {
             parts,
             accel,
@@ -216,6 +226,7 @@ impl Scene {
             &self.parts.objects,
             &self.parts.point_lights,
             &self.parts.background,
+            self.accel.world_bounds(),
         );
     }
 }

@@ -1,0 +1,19 @@
+//! `epsm bench`: performance measurements printed as text or JSON.
+
+/// The benchmarks.
+#[derive(clap::Subcommand, Debug)]
+pub enum BenchCommand {
+    /// Path-tracing throughput on scene files.
+    Render(super::bench_render::RenderBenchArgs),
+    /// BVH build and update time and closest-hit / occlusion rays per second
+    /// on a bumpy sphere (coherent and incoherent rays, 1 and all threads).
+    Rays(super::bench_rays::RaysBenchArgs),
+}
+
+/// Runs one benchmark.
+pub fn run(cmd: &BenchCommand) -> anyhow::Result<()> {
+    match cmd {
+        BenchCommand::Render(a) => super::bench_render::run(a),
+        BenchCommand::Rays(a) => super::bench_rays::run(a),
+    }
+}

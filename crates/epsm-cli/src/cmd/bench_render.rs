@@ -1,0 +1,85 @@
+//! `epsm bench render`: samples and rays per second on scene files, with
+//! 1 and all threads, BVH build time and peak memory.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use epsm_render::scene::load::load_scene;
+use epsm_render::tracer::{RenderOptions, render};
+
+/// Arguments of `epsm bench render`.
+#[derive(clap::Args, Debug)]
+pub struct RenderBenchArgs {
+    /// Scene files to measure.
+    #[arg(required = true)]
+    pub scenes: Vec<PathBuf>,
+    /// Samples per pixel (default: the scene's).
+    #[arg(long)]
+    pub spp: Option<u32>,
+    /// Maximum depth (default: the scene's).
+    #[arg(long)]
+    pub max_depth: Option<u32>,
+    /// Timed repetitions per thread count (the best is reported).
+    #[arg(long, default_value_t = 3)]
+    pub repeats: u32,
+    /// Print one JSON object per scene instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Runs `epsm bench render`.
+pub fn run(args: &RenderBenchArgs) -> anyhow::Result<()> {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    for path in &args.scenes {
+        let t0 = Instant::now();
+        let scene = load_scene(path)?;
+        let load_s = t0.elapsed().as_secs_f64();
+        let mut opts = RenderOptions::from_scene(&scene);
+        opts.spp = args.spp.unwrap_or(opts.spp);
+        opts.max_depth = args.max_depth.unwrap_or(opts.max_depth);
+        let mut results = Vec::new();
+        for threads in [1, cores] {
+            let mut best: Option<epsm_render::tracer::RenderOutput> = None;
+            for _ in 0..args.repeats.max(1) {
+                let out = super::with_threads(Some(threads), || render(&scene, &opts, &|_| {}))?;
+                if best.as_ref().is_none_or(|b| out.seconds < b.seconds) {
+                    best = Some(out);
+                }
+            }
+            if let Some(b) = best {
+                let rays = (b.counters.rays + b.counters.shadow_rays) as f64;
+                results.push(serde_json::json!({
+                    "threads": threads,
+                    "seconds": b.seconds,
+                    "samples_per_s": b.samples as f64 / b.seconds,
+                    "rays_per_s": rays / b.seconds,
+                    "rays_per_sample": rays / b.samples as f64,
+                }));
+            }
+        }
+        let cam = scene.camera();
+        let report = serde_json::json!({
+            "scene": path.display().to_string(),
+            "resolution": [cam.width, cam.height],
+            "spp": opts.spp,
+            "max_depth": opts.max_depth,
+            "load_and_build_s": load_s,
+            "runs": results,
+            "peak_rss_mb": peak_rss_mb(),
+        });
+        if args.json {
+            println!("{report}");
+        } else {
+            println!("{}", serde_json::to_string_pretty(&report)?);
+        }
+    }
+    Ok(())
+}
+
+/// Peak resident set size of this process in MB (`VmHWM`), when the OS tells.
+pub fn peak_rss_mb() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb / 1024.0)
+}

@@ -1,0 +1,57 @@
+//! The ground cost `c(P, Q) = ‖P − Q‖²` and the loss and gradient built from it.
+//!
+//! All solvers share these helpers: a matching assigns each source point `P_i`
+//! a target `T_i` (a matched point for the exact solver, a barycentre for the
+//! entropic one), the loss is `1/n Σ ‖P_i − T_i‖²`-like and the gradient with
+//! respect to `P_i` is `2 (P_i − T_i) / n`.
+
+use crate::points::{DIM, Point, PointCloud};
+
+/// Squared Euclidean distance in `f32`.
+#[inline]
+pub fn sq_dist(a: &Point, b: &Point) -> f32 {
+    (0..DIM).map(|d| (a[d] - b[d]) * (a[d] - b[d])).sum()
+}
+
+/// Squared Euclidean distance evaluated in `f64` (exact differences of `f32` inputs).
+#[inline]
+pub fn sq_dist_f64(a: &Point, b: &Point) -> f64 {
+    (0..DIM)
+        .map(|d| {
+            let t = f64::from(a[d]) - f64::from(b[d]);
+            t * t
+        })
+        .sum()
+}
+
+/// Squared diameter of the union of two clouds: the squared diagonal of their joint bounding box.
+pub fn diameter_sq(source: &PointCloud, target: &PointCloud) -> f64 {
+    let (lo_s, hi_s) = source.bounds();
+    let (lo_t, hi_t) = target.bounds();
+    (0..DIM)
+        .map(|d| {
+            let t = f64::from(hi_s[d].max(hi_t[d])) - f64::from(lo_s[d].min(lo_t[d]));
+            t * t
+        })
+        .sum()
+}
+
+/// Mean cost `1/n Σ_i ‖P_i − Q_σ(i)‖²` of an assignment σ, accumulated in `f64`.
+pub fn assignment_cost(source: &PointCloud, target: &PointCloud, perm: &[usize]) -> f64 {
+    let n = source.len() as f64;
+    perm.iter()
+        .enumerate()
+        .map(|(i, &j)| sq_dist_f64(&source.point(i), &target.point(j)))
+        .sum::<f64>()
+        / n
+}
+
+/// Gradient `2 (P_i − T_i) / n` of the loss for per-point targets `T_i`.
+pub fn displacement_gradient(source: &PointCloud, targets: &[Point]) -> Vec<Point> {
+    let scale = 2.0 / source.len() as f32;
+    source
+        .points()
+        .zip(targets)
+        .map(|(p, t)| std::array::from_fn(|d| scale * (p[d] - t[d])))
+        .collect()
+}

@@ -1,0 +1,246 @@
+//! Exact optimal assignment of equal-size clouds, verified optimal over all pairs.
+//!
+//! Minimises `Σ_i ‖P_i − Q_σ(i)‖²` over permutations σ. Loss `1/n Σ ‖P_i − Q_σ(i)‖²`,
+//! gradient `2 (P_i − Q_σ(i)) / n`.
+//!
+//! Named steps of [`solve`] (for `n ≥ dense_below`; smaller problems go to the
+//! [`dense`] reference solver):
+//! 1. **Warm start**: entropic potentials `f, g` from `sinkhorn` at `warm_start.blur`.
+//! 2. **Candidate graph**: for each source point the `candidates` targets of
+//!    smallest `c_ij − g_j`, and for each target the sources of smallest `c_ij − f_i`,
+//!    searched only inside the truncated plan's block support.
+//! 3. **Sparse solve**: shortest augmenting paths with potentials `v = g` (`sparse`).
+//! 4. **Optimality check**: a streaming pass over all pairs (block pairs are
+//!    skipped only when a rigorous bound proves `c_ij − u_i − v_j ≥ 0` for
+//!    all of them, see `blocks`) collects every pair with reduced cost below
+//!    `−tolerance`; they are added to the graph and step 3 resumes. When none
+//!    remain, `u, v` are feasible for the full problem and tight on the
+//!    matching, so the matching is optimal (to within `n · tolerance` in total cost).
+//!
+//! | key                    | meaning                                    | default |
+//! |------------------------|--------------------------------------------|---------|
+//! | `exact.dense_below`    | use the dense O(n³) solver below this n    | 64      |
+//! | `exact.candidates`     | candidate targets per point (and sources per target) | 8 |
+//! | `exact.tolerance`      | reduced cost counted as a violation below −tolerance | 1e-11 |
+//! | `exact.warm_start`     | Sinkhorn settings of the warm start        | blur 0.01, marginal tol 1e-2 |
+
+pub mod dense;
+mod sparse;
+
+use rayon::prelude::*;
+
+use crate::blocks::{Clustered, Support, fit_potentials};
+use crate::cost::{diameter_sq, sq_dist_f64};
+use crate::error::OtError;
+use crate::plan::{OtResult, SolveStats};
+use crate::points::{PointCloud, check_pair};
+use crate::sinkhorn::{SinkhornSettings, solve_dual};
+use sparse::SparseAssignment;
+
+/// Settings of the exact solver.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExactSettings {
+    /// Clouds smaller than this go to the dense reference solver.
+    pub dense_below: usize,
+    /// Candidate partners per point in the initial sparse graph.
+    pub candidates: usize,
+    /// Violation threshold of the optimality check.
+    pub tolerance: f64,
+    /// The entropic solve that provides potentials and candidates.
+    pub warm_start: SinkhornSettings,
+}
+
+impl Default for ExactSettings {
+    fn default() -> Self {
+        Self {
+            dense_below: 64,
+            candidates: 8,
+            tolerance: 1e-11,
+            warm_start: SinkhornSettings {
+                marginal_tolerance: 1e-2,
+                max_polish_iterations: 50,
+                ..SinkhornSettings::default()
+            },
+        }
+    }
+}
+
+impl ExactSettings {
+    /// Always use the sparse solver with its optimality check (used by tests on tiny clouds).
+    pub fn sparse_only() -> Self {
+        Self {
+            dense_below: 0,
+            ..Self::default()
+        }
+    }
+
+    /// Checks every setting against its documented range.
+    pub fn validate(&self) -> Result<(), OtError> {
+        if self.candidates == 0 {
+            return Err(OtError::InvalidSetting {
+                key: "exact.candidates",
+                value: 0.0,
+                reason: "must be at least 1",
+            });
+        }
+        if !(self.tolerance >= 0.0 && self.tolerance.is_finite()) {
+            return Err(OtError::InvalidSetting {
+                key: "exact.tolerance",
+                value: self.tolerance,
+                reason: "must be finite and non-negative",
+            });
+        }
+        self.warm_start.validate()
+    }
+}
+
+/// Solves the exact assignment problem from `source` to `target`.
+pub fn solve(
+    source: &PointCloud,
+    target: &PointCloud,
+    settings: &ExactSettings,
+) -> Result<OtResult, OtError> {
+    settings.validate()?;
+    let n = check_pair(source, target)?;
+    if n < settings.dense_below.max(2) {
+        return dense::solve(source, target);
+    }
+    let x = Clustered::new(source, settings.warm_start.cluster_size);
+    let y = Clustered::new(target, settings.warm_start.cluster_size);
+
+    // Warm start and candidate graph.
+    let dual = solve_dual(&x, &y, diameter_sq(source, target), &settings.warm_start);
+    let (f, g) = (dual.f, dual.g);
+    let mut stats = SolveStats {
+        pair_evaluations: dual.pairs,
+        ..SolveStats::default()
+    };
+    let k = settings.candidates;
+    let mut edges = best_partners(&x, &y, &dual.support.rows, &g, k);
+    for (j, row) in best_partners(&y, &x, &dual.support.cols, &f, k)
+        .into_iter()
+        .enumerate()
+    {
+        for (i, c) in row {
+            edges[i as usize].push((j as u32, c));
+        }
+    }
+    for row in &mut edges {
+        row.sort_unstable_by_key(|e| e.0);
+        row.dedup_by_key(|e| e.0);
+    }
+    let mut lsap = SparseAssignment::new(edges, g);
+
+    // Sparse solve, then check all pairs and add violators until none remain.
+    loop {
+        stats.iterations += 1;
+        for i in lsap.free_rows() {
+            if !lsap.augment(i) {
+                let full: Vec<(u32, u32, f64)> = (0..n)
+                    .map(|j| {
+                        (
+                            i as u32,
+                            j as u32,
+                            sq_dist_f64(&x.cloud.point(i), &y.cloud.point(j)),
+                        )
+                    })
+                    .collect();
+                stats.pair_evaluations += n as u64;
+                lsap.add_edges(&full);
+                let matched = lsap.augment(i);
+                debug_assert!(
+                    matched,
+                    "a row with edges to every column always reaches a free column"
+                );
+            }
+        }
+        let (violations, checked) = violations(&x, &y, &lsap.u, &lsap.v, settings.tolerance);
+        stats.pair_evaluations += checked;
+        if violations.is_empty() {
+            break;
+        }
+        stats.added_pairs += violations.len();
+        lsap.add_edges(&violations);
+    }
+    stats.candidate_pairs = lsap.edge_count();
+    let perm_sorted = lsap.permutation();
+    let mut perm = vec![0usize; n];
+    for (k, &j) in perm_sorted.iter().enumerate() {
+        perm[x.order[k] as usize] = y.order[j] as usize;
+    }
+    Ok(dense::permutation_result(source, target, perm, stats))
+}
+
+/// For each point of `x`, the `k` points of `y` with the smallest `c_ij − pot_j` inside the listed blocks.
+fn best_partners(
+    x: &Clustered,
+    y: &Clustered,
+    lists: &[Vec<u32>],
+    pot: &[f64],
+    k: usize,
+) -> Vec<Vec<(u32, f64)>> {
+    x.clusters
+        .par_iter()
+        .zip(lists)
+        .flat_map_iter(|(ci, list)| {
+            ci.range.clone().map(move |i| {
+                let p = x.cloud.point(i);
+                let mut scored: Vec<(f64, u32, f64)> = list
+                    .iter()
+                    .flat_map(|&jb| y.clusters[jb as usize].range.clone())
+                    .map(|j| {
+                        let c = sq_dist_f64(&p, &y.cloud.point(j));
+                        (c - pot[j], j as u32, c)
+                    })
+                    .collect();
+                let keep = k.min(scored.len());
+                if keep < scored.len() {
+                    scored.select_nth_unstable_by(keep, |a, b| {
+                        a.0.total_cmp(&b.0).then(a.1.cmp(&b.1))
+                    });
+                    scored.truncate(keep);
+                }
+                scored.into_iter().map(|(_, j, c)| (j, c)).collect()
+            })
+        })
+        .collect()
+}
+
+/// Every pair with `c_ij − u_i − v_j < −tolerance`, and the number of pairs evaluated.
+fn violations(
+    x: &Clustered,
+    y: &Clustered,
+    u: &[f64],
+    v: &[f64],
+    tolerance: f64,
+) -> (Vec<(u32, u32, f64)>, u64) {
+    let sup = Support::truncated(x, &fit_potentials(x, u), y, &fit_potentials(y, v), 0.0);
+    let parts: Vec<(Vec<(u32, u32, f64)>, u64)> = x
+        .clusters
+        .par_iter()
+        .zip(&sup.rows)
+        .map(|(ci, list)| {
+            let mut found = Vec::new();
+            let mut checked = 0u64;
+            for i in ci.range.clone() {
+                let p = x.cloud.point(i);
+                for j in list
+                    .iter()
+                    .flat_map(|&jb| y.clusters[jb as usize].range.clone())
+                {
+                    let c = sq_dist_f64(&p, &y.cloud.point(j));
+                    if c - u[i] - v[j] < -tolerance {
+                        found.push((i as u32, j as u32, c));
+                    }
+                }
+                checked += list
+                    .iter()
+                    .map(|&jb| y.clusters[jb as usize].range.len() as u64)
+                    .sum::<u64>();
+            }
+            (found, checked)
+        })
+        .collect();
+    let checked = parts.iter().map(|p| p.1).sum();
+    (parts.into_iter().flat_map(|p| p.0).collect(), checked)
+}

@@ -1,0 +1,188 @@
+//! Shortest-augmenting-path assignment on a sparse candidate graph, with warm-started potentials.
+//!
+//! Jonker–Volgenant style: row potentials `u` and column potentials `v` keep
+//! every candidate edge dual feasible (`c_ij − u_i − v_j ≥ 0`) and every
+//! matched edge tight. Each free row is matched by a Dijkstra search over
+//! reduced costs (a binary heap, so a search touches only the few columns a
+//! good warm start leaves within reach), after which the potentials of the
+//! scanned columns are shifted so feasibility and tightness still hold.
+//! Edges can be added at any time: an edge that violates feasibility lowers
+//! its row's potential and frees that row for another search.
+
+use std::cmp::Ordering;
+use std::collections::BinaryHeap;
+
+const NONE: u32 = u32::MAX;
+
+/// A heap entry ordered by smallest distance first, ties by column.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Entry {
+    dist: f64,
+    col: u32,
+}
+
+impl Eq for Entry {}
+
+impl Ord for Entry {
+    fn cmp(&self, other: &Self) -> Ordering {
+        other
+            .dist
+            .total_cmp(&self.dist)
+            .then(other.col.cmp(&self.col))
+    }
+}
+
+impl PartialOrd for Entry {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+/// The sparse assignment state: candidate edges, potentials and the (partial) matching.
+#[derive(Debug, Clone)]
+pub(crate) struct SparseAssignment {
+    edges: Vec<Vec<(u32, f64)>>,
+    pub u: Vec<f64>,
+    pub v: Vec<f64>,
+    col_of: Vec<u32>,
+    row_of: Vec<u32>,
+    dist: Vec<f64>,
+    pred: Vec<u32>,
+    scanned: Vec<bool>,
+}
+
+impl SparseAssignment {
+    /// Starts from candidate edges (per row) and column potentials `v`; rows take `u_i = min_j c_ij − v_j`
+    /// and are greedily matched along a tight edge when its column is free.
+    pub fn new(edges: Vec<Vec<(u32, f64)>>, v: Vec<f64>) -> Self {
+        let n = edges.len();
+        let mut s = Self {
+            u: vec![f64::INFINITY; n],
+            v,
+            col_of: vec![NONE; n],
+            row_of: vec![NONE; n],
+            dist: vec![f64::INFINITY; n],
+            pred: vec![NONE; n],
+            scanned: vec![false; n],
+            edges,
+        };
+        for i in 0..n {
+            let best = s.edges[i]
+                .iter()
+                .map(|&(j, c)| (c - s.v[j as usize], j))
+                .min_by(|a, b| a.0.total_cmp(&b.0));
+            if let Some((red, j)) = best {
+                s.u[i] = red;
+                if s.row_of[j as usize] == NONE {
+                    s.row_of[j as usize] = i as u32;
+                    s.col_of[i] = j;
+                }
+            }
+        }
+        s
+    }
+
+    /// Number of candidate edges.
+    pub fn edge_count(&self) -> usize {
+        self.edges.iter().map(Vec::len).sum()
+    }
+
+    /// Adds edges `(row, col, cost)`; rows whose potential must drop to stay feasible are unmatched.
+    pub fn add_edges(&mut self, added: &[(u32, u32, f64)]) {
+        for &(i, j, c) in added {
+            let (i, ju) = (i as usize, j as usize);
+            self.edges[i].push((j, c));
+            let red = c - self.v[ju];
+            if red < self.u[i] {
+                self.u[i] = red;
+                let old = self.col_of[i];
+                if old != NONE {
+                    self.row_of[old as usize] = NONE;
+                    self.col_of[i] = NONE;
+                }
+            }
+        }
+    }
+
+    /// Rows without a column.
+    pub fn free_rows(&self) -> Vec<usize> {
+        (0..self.col_of.len())
+            .filter(|&i| self.col_of[i] == NONE)
+            .collect()
+    }
+
+    /// The matching as a permutation (every row must be matched).
+    pub fn permutation(&self) -> Vec<usize> {
+        self.col_of.iter().map(|&j| j as usize).collect()
+    }
+
+    /// Matches the free row `i0` along a shortest augmenting path; `false` if no free column is reachable.
+    pub fn augment(&mut self, i0: usize) -> bool {
+        let mut heap = BinaryHeap::new();
+        let mut touched: Vec<u32> = Vec::new();
+        let mut scanned: Vec<u32> = Vec::new();
+        self.relax(i0, 0.0, &mut heap, &mut touched);
+        let mut found = None;
+        // Dijkstra over columns until a free one is settled.
+        while let Some(Entry { dist, col }) = heap.pop() {
+            let j = col as usize;
+            if self.scanned[j] || dist > self.dist[j] {
+                continue;
+            }
+            self.scanned[j] = true;
+            scanned.push(col);
+            if self.row_of[j] == NONE {
+                found = Some((j, dist));
+                break;
+            }
+            self.relax(self.row_of[j] as usize, dist, &mut heap, &mut touched);
+        }
+        if let Some((sink, dmin)) = found {
+            // Shift potentials: settled columns and their rows move by dmin − d_j.
+            self.u[i0] += dmin;
+            for &j in &scanned {
+                let j = j as usize;
+                if j != sink {
+                    let shift = dmin - self.dist[j];
+                    self.u[self.row_of[j] as usize] += shift;
+                    self.v[j] -= shift;
+                }
+            }
+            // Flip the path back to i0.
+            let mut j = sink;
+            loop {
+                let i = self.pred[j] as usize;
+                let prev = self.col_of[i];
+                self.col_of[i] = j as u32;
+                self.row_of[j] = i as u32;
+                if i == i0 {
+                    break;
+                }
+                j = prev as usize;
+            }
+        }
+        for &j in &touched {
+            self.dist[j as usize] = f64::INFINITY;
+            self.scanned[j as usize] = false;
+        }
+        found.is_some()
+    }
+
+    fn relax(&mut self, i: usize, base: f64, heap: &mut BinaryHeap<Entry>, touched: &mut Vec<u32>) {
+        for &(j, c) in &self.edges[i] {
+            let ju = j as usize;
+            if self.scanned[ju] {
+                continue;
+            }
+            let d = base + (c - self.u[i] - self.v[ju]).max(0.0);
+            if d < self.dist[ju] {
+                if self.dist[ju] == f64::INFINITY {
+                    touched.push(j);
+                }
+                self.dist[ju] = d;
+                self.pred[ju] = i as u32;
+                heap.push(Entry { dist: d, col: j });
+            }
+        }
+    }
+}

@@ -1,0 +1,238 @@
+//! Streaming log-sum-exp rows of the Gibbs kernel, written so the compiler vectorises them.
+//!
+//! One row of a log-domain Sinkhorn update is
+//! `softmin_i = −ε log Σ_j exp(h_j − c(x_i, y_j)/ε)` with `h_j = log b_j + g_j/ε`.
+//! We never store the kernel: targets are streamed in blocks of [`BLOCK`]
+//! from the five SoA columns, scores go to a stack buffer, and each block is
+//! reduced in two vectorisable passes (maximum, then sum of exponentials with
+//! a portable polynomial `exp`). Block sums are `f32`; the running sum across
+//! blocks is `f64`, rescaled when the running maximum grows.
+
+use std::ops::Range;
+
+use crate::points::{DIM, Point};
+
+/// Targets processed per block of a row.
+pub(crate) const BLOCK: usize = 256;
+const LANES: usize = 8;
+
+/// `exp(x)` for `x ≤ 0` (including `−∞`), relative error below 5e-6 (it grows with |x| through the rounding of `x log2 e`), zero below −87.
+///
+/// Cody–Waite style: `2^t` with `t = x log2 e` split into the nearest integer
+/// `n` (by the 1.5·2²³ rounding trick, so no `floor` call is needed) and a
+/// fraction in `[−½, ½]` handled by Cephes' `exp2f` polynomial; `2^n` is built
+/// in the exponent bits. Every step is branch-free so loops over it vectorise.
+#[inline(always)]
+pub(crate) fn exp_nonpositive(x: f32) -> f32 {
+    const MAGIC: f32 = 12_582_912.0;
+    let underflow = x < -87.0;
+    let t = if underflow { -87.0 } else { x } * std::f32::consts::LOG2_E;
+    let r = t + MAGIC;
+    let n = r - MAGIC;
+    let f = t - n;
+    let p = 1.535_336_2e-4_f32;
+    let p = p * f + 1.339_887_4e-3;
+    let p = p * f + 9.618_437e-3;
+    let p = p * f + 5.550_332_5e-2;
+    let p = p * f + 2.402_264_8e-1;
+    let p = p * f + 6.931_472e-1;
+    let p = p * f + 1.0;
+    let scale = f32::from_bits(r.to_bits().wrapping_add(127) << 23);
+    if underflow { 0.0 } else { p * scale }
+}
+
+/// Running state of one streamed row: log-sum-exp and optional weighted moments.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct RowSum {
+    max: f32,
+    sum: f64,
+    /// `Σ w_j y_j` (five coordinates) then `Σ w_j c_ij`, relative to `exp(max)`.
+    moments: [f64; DIM + 1],
+}
+
+impl RowSum {
+    pub(crate) fn new() -> Self {
+        Self {
+            max: f32::NEG_INFINITY,
+            sum: 0.0,
+            moments: [0.0; DIM + 1],
+        }
+    }
+
+    /// `log Σ_j exp(score_j)` over everything pushed so far.
+    pub(crate) fn log_sum(&self) -> f64 {
+        f64::from(self.max) + self.sum.ln()
+    }
+
+    /// The weighted mean target `Σ w_j y_j / Σ w_j` and mean cost (valid after a `moments` pass).
+    pub(crate) fn barycentre(&self) -> (Point, f64) {
+        (
+            std::array::from_fn(|d| (self.moments[d] / self.sum) as f32),
+            self.moments[DIM] / self.sum,
+        )
+    }
+
+    fn rescale_to(&mut self, new_max: f32) {
+        if new_max > self.max {
+            let s = f64::from(exp_nonpositive(self.max - new_max));
+            self.sum *= s;
+            self.moments.iter_mut().for_each(|m| *m *= s);
+            self.max = new_max;
+        }
+    }
+}
+
+/// Streams the targets in `ranges` against the point `x`.
+///
+/// Scores are `lw_j + (g_j − c(x, y_j))·inv_eps`: the potential and the cost are
+/// subtracted before scaling by `1/ε`, so relevant (nearly cancelling) pairs keep their precision. With `MOMENTS` the weighted target
+/// coordinates and costs are accumulated too (for barycentres). Returns the
+/// number of pairs evaluated.
+pub(crate) fn stream_row<const MOMENTS: bool>(
+    x: &Point,
+    y: &[Vec<f32>; DIM],
+    lw: &[f32],
+    g: &[f32],
+    inv_eps: f32,
+    ranges: impl Iterator<Item = Range<usize>>,
+    acc: &mut RowSum,
+) -> u64 {
+    let mut scores = [f32::NEG_INFINITY; BLOCK];
+    let mut costs = [0.0f32; BLOCK];
+    let mut pairs = 0u64;
+    for range in ranges {
+        let mut start = range.start;
+        while start < range.end {
+            let len = (range.end - start).min(BLOCK);
+            pairs += len as u64;
+            let padded = len.div_ceil(LANES) * LANES;
+            let (c0, c1, c2, c3, c4) = (
+                &y[0][start..start + len],
+                &y[1][start..start + len],
+                &y[2][start..start + len],
+                &y[3][start..start + len],
+                &y[4][start..start + len],
+            );
+            let (lws, gs) = (&lw[start..start + len], &g[start..start + len]);
+            let (sc, cc) = (&mut scores[..len], &mut costs[..len]);
+            for k in 0..len {
+                let d0 = x[0] - c0[k];
+                let d1 = x[1] - c1[k];
+                let d2 = x[2] - c2[k];
+                let d3 = x[3] - c3[k];
+                let d4 = x[4] - c4[k];
+                let c = d0 * d0 + d1 * d1 + d2 * d2 + d3 * d3 + d4 * d4;
+                if MOMENTS {
+                    cc[k] = c;
+                }
+                sc[k] = lws[k] + (gs[k] - c) * inv_eps;
+            }
+            scores[len..padded].fill(f32::NEG_INFINITY);
+            let block_max = lane_max(&scores[..padded]);
+            acc.rescale_to(block_max);
+            if acc.max == f32::NEG_INFINITY {
+                start += len;
+                continue;
+            }
+            let m = acc.max;
+            let mut weights = [0.0f32; BLOCK];
+            for (w, &sc) in weights[..padded].iter_mut().zip(&scores[..padded]) {
+                *w = exp_nonpositive(sc - m);
+            }
+            acc.sum += f64::from(lane_sum(&weights[..padded]));
+            if MOMENTS {
+                let ys = [c0, c1, c2, c3, c4];
+                let mut mom = [0.0f32; DIM + 1];
+                for k in 0..len {
+                    for d in 0..DIM {
+                        mom[d] += weights[k] * ys[d][k];
+                    }
+                    mom[DIM] += weights[k] * costs[k];
+                }
+                for (a, b) in acc.moments.iter_mut().zip(mom) {
+                    *a += f64::from(b);
+                }
+            }
+            start += len;
+        }
+    }
+    pairs
+}
+
+/// Sum of a slice whose length is a multiple of [`LANES`], in vectorisable lanes (fixed order).
+fn lane_sum(values: &[f32]) -> f32 {
+    let mut lanes = [0.0f32; LANES];
+    for chunk in values.chunks_exact(LANES) {
+        for l in 0..LANES {
+            lanes[l] += chunk[l];
+        }
+    }
+    lanes.iter().sum()
+}
+
+/// Maximum of a slice whose length is a multiple of [`LANES`], in vectorisable lanes.
+fn lane_max(values: &[f32]) -> f32 {
+    let mut lanes = [f32::NEG_INFINITY; LANES];
+    for chunk in values.chunks_exact(LANES) {
+        for l in 0..LANES {
+            lanes[l] = if chunk[l] > lanes[l] {
+                chunk[l]
+            } else {
+                lanes[l]
+            };
+        }
+    }
+    lanes.iter().copied().fold(f32::NEG_INFINITY, f32::max)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fast_exp_matches_std_exp() {
+        for k in 0..=20_000 {
+            let x = -(k as f32) * 0.005;
+            let (a, b) = (exp_nonpositive(x), x.exp());
+            assert!((a - b).abs() <= 5e-6 * b + 1e-37, "x = {x}: {a} vs {b}");
+        }
+        assert_eq!(exp_nonpositive(f32::NEG_INFINITY), 0.0);
+        assert_eq!(exp_nonpositive(-200.0), 0.0);
+    }
+
+    #[test]
+    fn streamed_row_matches_direct_log_sum_exp() {
+        let n = 150;
+        let y: [Vec<f32>; DIM] =
+            std::array::from_fn(|d| (0..n).map(|j| ((j * (d + 3)) % 17) as f32 / 17.0).collect());
+        let h: Vec<f32> = (0..n).map(|j| -(j as f32) * 0.01).collect();
+        let g = vec![0.0f32; n];
+        let x = [0.3, 0.1, 0.7, 0.2, 0.9];
+        let inv_eps = 20.0;
+        let mut acc = RowSum::new();
+        let pairs = stream_row::<true>(
+            &x,
+            &y,
+            &h,
+            &g,
+            inv_eps,
+            [0..40, 40..n].into_iter(),
+            &mut acc,
+        );
+        assert_eq!(pairs, n as u64);
+        let scores: Vec<f64> = (0..n)
+            .map(|j| {
+                let c: f64 = (0..DIM).map(|d| f64::from(x[d] - y[d][j]).powi(2)).sum();
+                f64::from(h[j]) - c * f64::from(inv_eps)
+            })
+            .collect();
+        let m = scores.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let s: f64 = scores.iter().map(|v| (v - m).exp()).sum();
+        assert!((acc.log_sum() - (m + s.ln())).abs() < 1e-5);
+        let bary0: f64 = (0..n)
+            .map(|j| (scores[j] - m).exp() * f64::from(y[0][j]))
+            .sum::<f64>()
+            / s;
+        assert!((f64::from(acc.barycentre().0[0]) - bary0).abs() < 1e-5);
+    }
+}

@@ -1,0 +1,91 @@
+//! What a solve returns: the loss, the per-point gradient and the matching itself.
+//!
+//! Every matcher returns an [`OtResult`]. Its [`Matching`] says how the source
+//! points were matched so a viewer can draw it: a permutation for the exact
+//! solver, potentials plus barycentric targets for the entropic one, and
+//! per-point displacement targets for the approximate sliced matcher. Whatever
+//! the matcher, [`OtResult::target`] gives the point each source point is
+//! pulled toward, and `gradient[i] = 2 (P_i − target(i)) / n` (for the
+//! debiased divergence, the target includes the self-transport correction).
+
+use crate::points::Point;
+
+/// Result of matching a source cloud to a target cloud.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OtResult {
+    /// The loss value (see each matcher for its exact definition).
+    pub loss: f64,
+    /// `∂L/∂P_i` for every source point, in source order.
+    pub gradient: Vec<Point>,
+    /// How the points were matched.
+    pub matching: Matching,
+    /// Work counters of the solve.
+    pub stats: SolveStats,
+}
+
+impl OtResult {
+    /// The point source point `i` is pulled toward: `P_i − (n/2) ∂L/∂P_i`.
+    pub fn target(&self, source_point: Point, i: usize) -> Point {
+        let half_n = self.gradient.len() as f32 / 2.0;
+        std::array::from_fn(|d| source_point[d] - half_n * self.gradient[i][d])
+    }
+}
+
+/// The matching found by a solver.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Matching {
+    /// Exact assignment: source point `i` is matched to target point `perm[i]`.
+    Permutation(Vec<usize>),
+    /// Entropic plan: dual potentials and each source point's barycentric target.
+    Entropic(EntropicPlan),
+    /// Sliced (approximate) matching: each source point's displacement target.
+    Sliced(SlicedPlan),
+}
+
+/// An entropic transport plan `π_ij = a_i b_j exp((f_i + g_j − c_ij) / ε)`, stored through its potentials.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EntropicPlan {
+    /// The final regularisation ε (the squared blur).
+    pub epsilon: f64,
+    /// Source potential `f_i`, in source order.
+    pub f: Vec<f64>,
+    /// Target potential `g_j`, in target order.
+    pub g: Vec<f64>,
+    /// Barycentric projection `T(P_i) = Σ_j π_ij Q_j / Σ_j π_ij` of each source point.
+    pub barycentres: Vec<Point>,
+    /// Primal transport cost `Σ_ij π_ij c_ij` of the (row-normalised) plan.
+    pub transport_cost: f64,
+    /// L1 error of the plan's source marginal (the target marginal is exact after the last update).
+    pub marginal_error: f64,
+}
+
+impl EntropicPlan {
+    /// The barycentric target of source point `i`.
+    pub fn barycentric_target(&self, i: usize) -> Point {
+        self.barycentres[i]
+    }
+}
+
+/// A sliced matching: the average, over random 1-D projections, of each point's sorted partner.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SlicedPlan {
+    /// Number of random projections used.
+    pub projections: usize,
+    /// The point each source point is pulled toward, in source order.
+    pub targets: Vec<Point>,
+}
+
+/// Work counters, for benchmarks and reports.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SolveStats {
+    /// Sinkhorn updates (each a pass over source and target), or sparse re-solves for the exact solver.
+    pub iterations: usize,
+    /// Number of `(i, j)` cost/kernel evaluations.
+    pub pair_evaluations: u64,
+    /// Candidate pairs in the sparse graph at the end (exact solver).
+    pub candidate_pairs: usize,
+    /// Pairs added because the optimality check found them violated (exact solver).
+    pub added_pairs: usize,
+    /// L1 marginal error of the plan (entropic solver).
+    pub marginal_error: Option<f64>,
+}

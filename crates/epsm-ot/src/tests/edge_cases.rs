@@ -1,0 +1,167 @@
+//! Bad input and degenerate clouds, for every matcher.
+
+use super::{random_cloud, translated};
+use crate::points::PointCloud;
+use crate::synthetic::Rng;
+use crate::{ExactSettings, Matcher, OtError, SinkhornSettings};
+
+fn matchers() -> Vec<Matcher> {
+    vec![
+        Matcher::exact(),
+        Matcher::Exact(ExactSettings::sparse_only()),
+        Matcher::sinkhorn(),
+        Matcher::Sinkhorn(SinkhornSettings::debiased()),
+        Matcher::sliced(),
+    ]
+}
+
+fn all_finite(r: &crate::OtResult) -> bool {
+    r.loss.is_finite() && r.gradient.iter().flatten().all(|g| g.is_finite())
+}
+
+#[test]
+fn bad_input_is_a_typed_error() {
+    assert_eq!(PointCloud::from_points(&[]), Err(OtError::Empty));
+    let nan = PointCloud::from_points(&[[0.0, f32::NAN, 0.0, 0.0, 0.0]]);
+    assert!(matches!(
+        nan,
+        Err(OtError::NonFinite {
+            index: 0,
+            axis: "g",
+            ..
+        })
+    ));
+    let inf = PointCloud::from_points(&[[0.0; 5], [0.0, 0.0, 0.0, f32::INFINITY, 0.0]]);
+    assert!(matches!(
+        inf,
+        Err(OtError::NonFinite {
+            index: 1,
+            axis: "x",
+            ..
+        })
+    ));
+    let ragged = PointCloud::from_columns([
+        vec![0.0; 3],
+        vec![0.0; 3],
+        vec![0.0; 2],
+        vec![0.0; 3],
+        vec![0.0; 3],
+    ]);
+    assert!(matches!(
+        ragged,
+        Err(OtError::RaggedColumns {
+            axis: "b",
+            len: 2,
+            expected: 3
+        })
+    ));
+    let mut rng = Rng::new(1);
+    let (a, b) = (
+        random_cloud(&mut rng, 5, 1.0),
+        random_cloud(&mut rng, 6, 1.0),
+    );
+    for m in matchers() {
+        assert_eq!(
+            m.solve(&a, &b),
+            Err(OtError::SizeMismatch {
+                source_len: 5,
+                target_len: 6
+            })
+        );
+    }
+    let bad = Matcher::Sinkhorn(SinkhornSettings {
+        blur: -1.0,
+        ..SinkhornSettings::default()
+    });
+    assert!(matches!(
+        bad.solve(&a, &a),
+        Err(OtError::InvalidSetting {
+            key: "sinkhorn.blur",
+            ..
+        })
+    ));
+}
+
+#[test]
+fn single_point_clouds() {
+    let a = PointCloud::from_points(&[[0.1, 0.2, 0.3, 0.4, 0.5]]).unwrap_or_else(|e| panic!("{e}"));
+    let b = PointCloud::from_points(&[[0.5, 0.2, 0.3, 0.4, 0.0]]).unwrap_or_else(|e| panic!("{e}"));
+    for m in matchers() {
+        let r = m.solve(&a, &b).unwrap_or_else(|e| panic!("{e}"));
+        assert!(all_finite(&r), "{}", m.name());
+        if matches!(m, Matcher::Sliced(_)) {
+            // Approximate: only the dominant directions are reliable.
+            assert!(
+                r.gradient[0][0] < 0.0 && r.gradient[0][4] > 0.0,
+                "sliced: {:?}",
+                r.gradient
+            );
+            continue;
+        }
+        assert!(
+            (r.gradient[0][0] - 2.0 * (0.1 - 0.5)).abs() < 1e-4,
+            "{}: {:?}",
+            m.name(),
+            r.gradient
+        );
+        assert!(
+            (r.gradient[0][4] - 2.0 * 0.5).abs() < 1e-4,
+            "{}: {:?}",
+            m.name(),
+            r.gradient
+        );
+    }
+}
+
+#[test]
+fn identical_clouds_give_zero_loss_and_gradient() {
+    let mut rng = Rng::new(2);
+    let a = random_cloud(&mut rng, 300, 1.0);
+    for m in [
+        Matcher::exact(),
+        Matcher::Exact(ExactSettings::sparse_only()),
+        Matcher::Sinkhorn(SinkhornSettings::debiased()),
+    ] {
+        let r = m.solve(&a, &a).unwrap_or_else(|e| panic!("{e}"));
+        assert!(r.loss.abs() <= 1e-12, "{}: loss {}", m.name(), r.loss);
+        assert!(
+            r.gradient.iter().flatten().all(|&g| g == 0.0),
+            "{}",
+            m.name()
+        );
+    }
+    let r = Matcher::sinkhorn()
+        .solve(&a, &a)
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert!(all_finite(&r) && r.gradient.iter().flatten().all(|g| g.abs() < 1e-5));
+}
+
+#[test]
+fn duplicate_points_far_apart_clouds_and_tiny_epsilon() {
+    let dup = PointCloud::from_points(&vec![[0.5; 5]; 100]).unwrap_or_else(|e| panic!("{e}"));
+    let mut rng = Rng::new(3);
+    let other = random_cloud(&mut rng, 100, 1.0);
+    let far = translated(&other, [0.0, 0.0, 0.0, 1000.0, -1000.0]);
+    let tiny = Matcher::Sinkhorn(SinkhornSettings {
+        blur: 1e-3,
+        ..SinkhornSettings::default()
+    });
+    for m in matchers().into_iter().chain([tiny]) {
+        for (s, t) in [(&dup, &other), (&other, &dup), (&other, &far), (&dup, &dup)] {
+            let r = m.solve(s, t).unwrap_or_else(|e| panic!("{e}"));
+            assert!(all_finite(&r), "{} produced non-finite output", m.name());
+        }
+        let r = m.solve(&other, &far).unwrap_or_else(|e| panic!("{e}"));
+        let mean_x = r.gradient.iter().map(|g| g[3]).sum::<f32>() / 100.0;
+        let tolerance = if matches!(m, Matcher::Sliced(_)) {
+            5.0
+        } else {
+            0.5
+        };
+        assert!(
+            (mean_x + 2000.0 / 100.0).abs() < tolerance,
+            "{}: far-apart mean x gradient {mean_x}",
+            m.name()
+        );
+    }
+}

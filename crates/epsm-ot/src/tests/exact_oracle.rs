@@ -1,0 +1,157 @@
+//! The exact solver against brute force (n ≤ 8), the dense reference and the `lsap` crate.
+
+use super::random_cloud;
+use crate::cost::{assignment_cost, sq_dist_f64};
+use crate::exact::{self, ExactSettings, dense};
+use crate::plan::Matching;
+use crate::points::PointCloud;
+use crate::synthetic::{Rng, blobs_pair};
+
+fn permutation(m: &Matching) -> Vec<usize> {
+    match m {
+        Matching::Permutation(p) => p.clone(),
+        other => panic!("expected a permutation, got {other:?}"),
+    }
+}
+
+fn brute_force(source: &PointCloud, target: &PointCloud) -> f64 {
+    fn rec(k: usize, used: &mut [bool], acc: f64, cost: &[Vec<f64>], best: &mut f64) {
+        if k == cost.len() {
+            *best = best.min(acc);
+            return;
+        }
+        for j in 0..cost.len() {
+            if !used[j] {
+                used[j] = true;
+                rec(k + 1, used, acc + cost[k][j], cost, best);
+                used[j] = false;
+            }
+        }
+    }
+    let cost: Vec<Vec<f64>> = source
+        .points()
+        .map(|p| target.points().map(|q| sq_dist_f64(&p, &q)).collect())
+        .collect();
+    let mut best = f64::INFINITY;
+    rec(0, &mut vec![false; cost.len()], 0.0, &cost, &mut best);
+    best / source.len() as f64
+}
+
+fn lsap_cost(source: &PointCloud, target: &PointCloud) -> f64 {
+    let n = source.len();
+    let cost: Vec<f64> = source
+        .points()
+        .flat_map(|p| target.points().map(move |q| sq_dist_f64(&p, &q)))
+        .collect();
+    let (rows, cols) = lsap::solve(n, n, &cost, false).unwrap_or_else(|e| panic!("lsap: {e:?}"));
+    rows.iter()
+        .zip(&cols)
+        .map(|(&i, &j)| cost[i * n + j])
+        .sum::<f64>()
+        / n as f64
+}
+
+fn assert_valid_permutation(perm: &[usize]) {
+    let mut seen = vec![false; perm.len()];
+    for &j in perm {
+        assert!(!seen[j], "column {j} used twice");
+        seen[j] = true;
+    }
+}
+
+#[test]
+fn exact_matches_brute_force_for_tiny_clouds() {
+    let mut rng = Rng::new(7);
+    for case in 0..300 {
+        let n = 1 + case % 8;
+        let (s, t) = (
+            random_cloud(&mut rng, n, 1.0),
+            random_cloud(&mut rng, n, 1.0),
+        );
+        let best = brute_force(&s, &t);
+        for settings in [ExactSettings::default(), ExactSettings::sparse_only()] {
+            let r = exact::solve(&s, &t, &settings).unwrap_or_else(|e| panic!("{e}"));
+            let perm = permutation(&r.matching);
+            assert_valid_permutation(&perm);
+            assert!(
+                (r.loss - best).abs() <= 1e-9,
+                "case {case}: {} vs brute force {best}",
+                r.loss
+            );
+            assert!((assignment_cost(&s, &t, &perm) - r.loss).abs() <= 1e-12);
+        }
+    }
+}
+
+#[test]
+fn dense_reference_potentials_prove_optimality() {
+    let mut rng = Rng::new(3);
+    let (s, t) = (
+        random_cloud(&mut rng, 60, 1.0),
+        random_cloud(&mut rng, 60, 1.0),
+    );
+    let cost: Vec<f64> = s
+        .points()
+        .flat_map(|p| t.points().map(move |q| sq_dist_f64(&p, &q)))
+        .collect();
+    let a = dense::solve_matrix(&cost, 60);
+    for i in 0..60 {
+        for j in 0..60 {
+            assert!(cost[i * 60 + j] - a.u[i] - a.v[j] >= -1e-12);
+        }
+        assert!((cost[i * 60 + a.perm[i]] - a.u[i] - a.v[a.perm[i]]).abs() <= 1e-12);
+    }
+}
+
+#[test]
+fn sparse_exact_matches_lsap_on_uniform_clouds() {
+    let mut rng = Rng::new(11);
+    for n in [65, 300, 1000] {
+        let (s, t) = (
+            random_cloud(&mut rng, n, 1.0),
+            random_cloud(&mut rng, n, 1.0),
+        );
+        let r =
+            exact::solve(&s, &t, &ExactSettings::sparse_only()).unwrap_or_else(|e| panic!("{e}"));
+        assert_valid_permutation(&permutation(&r.matching));
+        let oracle = lsap_cost(&s, &t);
+        assert!(
+            (r.loss - oracle).abs() <= 1e-9 * (1.0 + oracle),
+            "n = {n}: {} vs lsap {oracle}",
+            r.loss
+        );
+    }
+}
+
+#[test]
+fn sparse_exact_matches_lsap_and_dense_on_blobs_up_to_2048() {
+    for (n, seed) in [(256, 1), (1024, 2), (2048, 3)] {
+        let (s, t) = blobs_pair(n, seed).unwrap_or_else(|| panic!("fixture"));
+        let r =
+            exact::solve(&s, &t, &ExactSettings::sparse_only()).unwrap_or_else(|e| panic!("{e}"));
+        assert_valid_permutation(&permutation(&r.matching));
+        let oracle = lsap_cost(&s, &t);
+        assert!(
+            (r.loss - oracle).abs() <= 1e-9 * (1.0 + oracle),
+            "n = {n}: {} vs lsap {oracle}",
+            r.loss
+        );
+        if n <= 256 {
+            let d = dense::solve(&s, &t).unwrap_or_else(|e| panic!("{e}"));
+            assert!((d.loss - oracle).abs() <= 1e-9 * (1.0 + oracle));
+        }
+    }
+}
+
+#[test]
+fn exact_gradient_is_displacement_to_partner() {
+    let (s, t) = blobs_pair(400, 5).unwrap_or_else(|| panic!("fixture"));
+    let r = exact::solve(&s, &t, &ExactSettings::default()).unwrap_or_else(|e| panic!("{e}"));
+    let perm = permutation(&r.matching);
+    for (i, &j) in perm.iter().enumerate() {
+        let (p, q) = (s.point(i), t.point(j));
+        for d in 0..5 {
+            assert!((r.gradient[i][d] - 2.0 * (p[d] - q[d]) / 400.0).abs() <= 1e-7);
+        }
+    }
+}

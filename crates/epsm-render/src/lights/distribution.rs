@@ -1,0 +1,228 @@
+//! Piecewise-constant 1D and 2D distributions for importance sampling
+//! (pbrt-v4 §A.4): light selection by power, triangle selection by area and
+//! environment-map texel selection by luminance.
+//!
+//! Cumulative sums are kept in `f64` so that tables of millions of entries
+//! stay exact to `f32` precision; entries of weight zero are never sampled.
+
+use glam::Vec2;
+
+/// A discrete choice: the index, its probability and the uniform number
+/// re-stretched to `[0, 1)` within the chosen entry (reusable for a further
+/// independent choice).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DiscreteSample {
+    /// Chosen entry.
+    pub index: usize,
+    /// Probability of the entry.
+    pub pmf: f64,
+    /// The uniform number remapped into `[0, 1)` inside the entry.
+    pub u_remapped: f64,
+}
+
+/// A piecewise-constant density on `[0, 1)` (equal-width entries), also used
+/// as a discrete distribution over its entries.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Distribution1D {
+    /// Non-negative weights.
+    func: Vec<f64>,
+    /// Normalised cumulative sums, `cdf[0] = 0`, `cdf[n] = 1`.
+    cdf: Vec<f64>,
+    /// Sum of the weights.
+    total: f64,
+}
+
+impl Distribution1D {
+    /// A distribution over `weights` (negative and non-finite weights count as
+    /// zero). `None` when all weights are zero or there are none.
+    pub fn new(weights: &[f64]) -> Option<Self> {
+        let func: Vec<f64> = weights
+            .iter()
+            .map(|&w| if w.is_finite() && w > 0.0 { w } else { 0.0 })
+            .collect();
+        let mut cdf = Vec::with_capacity(func.len() + 1);
+        let mut acc = 0.0;
+        cdf.push(0.0);
+        for &w in &func {
+            acc += w;
+            cdf.push(acc);
+        }
+        if !(acc > 0.0 && acc.is_finite()) {
+            return None;
+        }
+        for c in &mut cdf {
+            *c /= acc;
+        }
+        Some(Self {
+            func,
+            cdf,
+            total: acc,
+        })
+    }
+
+    /// Number of entries.
+    pub fn len(&self) -> usize {
+        self.func.len()
+    }
+
+    /// Whether there are no entries (never true for a constructed distribution).
+    pub fn is_empty(&self) -> bool {
+        self.func.is_empty()
+    }
+
+    /// Sum of the weights.
+    pub fn total(&self) -> f64 {
+        self.total
+    }
+
+    /// Probability of entry `index`.
+    pub fn pmf(&self, index: usize) -> f64 {
+        self.func.get(index).map_or(0.0, |w| w / self.total)
+    }
+
+    /// Chooses an entry with probability proportional to its weight.
+    pub fn sample_discrete(&self, u: f64) -> DiscreteSample {
+        // The entry i with cdf[i] ≤ u < cdf[i + 1]; zero-weight entries have an
+        // empty interval and are skipped.
+        let u = u.clamp(0.0, 1.0);
+        let upper = self.cdf.partition_point(|&c| c <= u);
+        let mut index = upper.saturating_sub(1).min(self.func.len() - 1);
+        while self.func[index] == 0.0 && index > 0 {
+            index -= 1;
+        }
+        let (lo, hi) = (self.cdf[index], self.cdf[index + 1]);
+        let u_remapped = ((u - lo) / (hi - lo)).clamp(0.0, 1.0 - f64::EPSILON);
+        DiscreteSample {
+            index,
+            pmf: hi - lo,
+            u_remapped,
+        }
+    }
+
+    /// Samples `x ∈ [0, 1)` from the piecewise-constant density; returns
+    /// `(x, density at x, entry)`.
+    pub fn sample_continuous(&self, u: f64) -> ContinuousSample {
+        let d = self.sample_discrete(u);
+        let n = self.func.len() as f64;
+        ContinuousSample {
+            x: ((d.index as f64 + d.u_remapped) / n).min(1.0 - f64::EPSILON),
+            pdf: d.pmf * n,
+            index: d.index,
+        }
+    }
+
+    /// Density at `x ∈ [0, 1]` of [`Self::sample_continuous`].
+    pub fn pdf(&self, x: f64) -> f64 {
+        let n = self.func.len();
+        let i = ((x * n as f64) as usize).min(n - 1);
+        self.pmf(i) * n as f64
+    }
+}
+
+/// A sampled point of a continuous piecewise-constant density.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ContinuousSample {
+    /// The point in `[0, 1)`.
+    pub x: f64,
+    /// Density at `x`.
+    pub pdf: f64,
+    /// The entry `x` lies in.
+    pub index: usize,
+}
+
+/// A piecewise-constant density on `[0, 1)²` over a `width × height` table
+/// (row `y` covers `v ∈ [y/h, (y+1)/h)`), sampled as a marginal over rows and
+/// a conditional within the row.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Distribution2D {
+    rows: Vec<Option<Distribution1D>>,
+    marginal: Distribution1D,
+}
+
+/// A sampled point of a [`Distribution2D`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sample2D {
+    /// The point `(u, v)` in `[0, 1)²`.
+    pub uv: Vec2,
+    /// Density at the point with respect to `du dv`.
+    pub pdf: f64,
+}
+
+impl Distribution2D {
+    /// A distribution over a row-major `width × height` table of weights.
+    /// `None` when every weight is zero.
+    pub fn new(weights: &[f64], width: usize, height: usize) -> Option<Self> {
+        debug_assert_eq!(weights.len(), width * height);
+        let rows: Vec<Option<Distribution1D>> = weights
+            .chunks(width.max(1))
+            .take(height)
+            .map(Distribution1D::new)
+            .collect();
+        let row_weights: Vec<f64> = rows
+            .iter()
+            .map(|r| r.as_ref().map_or(0.0, |r| r.total()))
+            .collect();
+        let marginal = Distribution1D::new(&row_weights)?;
+        Some(Self { rows, marginal })
+    }
+
+    /// Samples `(u, v)` with density proportional to the table.
+    pub fn sample(&self, u: Vec2) -> Option<Sample2D> {
+        let row = self.marginal.sample_continuous(u.y as f64);
+        let col = self.rows[row.index].as_ref()?.sample_continuous(u.x as f64);
+        Some(Sample2D {
+            uv: Vec2::new(col.x as f32, row.x as f32),
+            pdf: row.pdf * col.pdf,
+        })
+    }
+
+    /// Density at `uv` of [`Self::sample`].
+    pub fn pdf(&self, uv: Vec2) -> f64 {
+        let h = self.rows.len();
+        let y = ((uv.y as f64 * h as f64) as usize).min(h - 1);
+        match &self.rows[y] {
+            Some(row) => self.marginal.pdf(uv.y as f64) * row.pdf(uv.x as f64),
+            None => 0.0,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn discrete_sampling_skips_zero_weights_and_reports_pmf() {
+        let d = Distribution1D::new(&[0.0, 1.0, 0.0, 3.0, 0.0]).expect("non-zero");
+        for k in 0..=1000 {
+            let s = d.sample_discrete(k as f64 / 1000.0);
+            assert!(s.index == 1 || s.index == 3, "{s:?}");
+            assert_eq!(s.pmf, d.pmf(s.index));
+            assert!((0.0..1.0).contains(&s.u_remapped));
+        }
+        assert_eq!(d.sample_discrete(0.2).index, 1);
+        assert_eq!(d.sample_discrete(0.3).index, 3);
+        assert!((d.pmf(3) - 0.75).abs() < 1e-12);
+        assert!(Distribution1D::new(&[0.0, 0.0]).is_none());
+    }
+
+    #[test]
+    fn continuous_2d_density_matches_table_and_integrates_to_one() {
+        let (w, h) = (4usize, 3usize);
+        let table: Vec<f64> = (0..w * h).map(|i| (i % 5) as f64).collect();
+        let d = Distribution2D::new(&table, w, h).expect("non-zero");
+        let mean = table.iter().sum::<f64>() / (w * h) as f64;
+        let mut integral = 0.0;
+        for y in 0..h {
+            for x in 0..w {
+                let uv = Vec2::new((x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32);
+                let pdf = d.pdf(uv);
+                assert!((pdf - table[y * w + x] / mean).abs() < 1e-9);
+                integral += pdf / (w * h) as f64;
+            }
+        }
+        assert!((integral - 1.0).abs() < 1e-12);
+        let s = d.sample(Vec2::new(0.37, 0.81)).expect("sample");
+        assert!((s.pdf - d.pdf(s.uv)).abs() < 1e-9 * s.pdf);
+    }
+}

@@ -1,0 +1,126 @@
+//! Value checks shared by every section of the loader: each takes the dotted
+//! field name, checks one documented range and returns the value in the
+//! renderer's types, or a located [`SceneError`] saying what was expected.
+
+use std::collections::HashSet;
+use std::path::{Path, PathBuf};
+
+use glam::{DVec3, Vec3};
+
+use super::locate::Locator;
+use crate::error::{Error, SceneError};
+
+/// What errors need to name a field: the file, its locator, and the prefix of
+/// the scene inside the file (empty unless embedded in a larger file).
+pub struct Ctx<'a> {
+    /// The file, as given.
+    pub file: &'a Path,
+    /// Where relative paths resolve: the file's directory.
+    pub base: PathBuf,
+    /// Lines of fields.
+    pub locator: &'a Locator,
+    /// Dotted prefix of the scene's fields in the file.
+    pub prefix: &'a str,
+}
+
+impl Ctx<'_> {
+    /// The full dotted path of `field`.
+    fn path(&self, field: &str) -> String {
+        if self.prefix.is_empty() {
+            field.to_owned()
+        } else {
+            format!("{}.{field}", self.prefix)
+        }
+    }
+
+    /// An error at `field`, with its line when the file has it.
+    pub fn err(&self, field: &str, message: impl Into<String>) -> Error {
+        let path = self.path(field);
+        let line = self.locator.line(&path);
+        let mut e = SceneError::new(self.file, path, message);
+        e.line = line;
+        e.into()
+    }
+
+    /// A path from the file, resolved against the file's directory.
+    pub fn resolve(&self, relative: &str) -> PathBuf {
+        self.base.join(relative)
+    }
+
+    /// A finite number.
+    pub fn finite(&self, field: &str, v: f64) -> Result<f64, Error> {
+        if v.is_finite() {
+            Ok(v)
+        } else {
+            Err(self.err(field, format!("expected a finite number, found {v}")))
+        }
+    }
+
+    /// A number in `[lo, hi]`; `what` names the range in the message.
+    pub fn within(&self, field: &str, v: f64, lo: f64, hi: f64, what: &str) -> Result<f64, Error> {
+        let v = self.finite(field, v)?;
+        if (lo..=hi).contains(&v) {
+            Ok(v)
+        } else {
+            Err(self.err(field, format!("expected {what}, found {v}")))
+        }
+    }
+
+    /// A vector of finite numbers.
+    pub fn vec3(&self, field: &str, v: [f64; 3]) -> Result<DVec3, Error> {
+        for (i, x) in v.into_iter().enumerate() {
+            self.finite(&format!("{field}[{i}]"), x)?;
+        }
+        Ok(DVec3::from_array(v))
+    }
+
+    /// A linear RGB colour, each channel in `[0, max]`.
+    pub fn color(&self, field: &str, v: [f64; 3], max: f64) -> Result<Vec3, Error> {
+        let what = if max.is_finite() {
+            format!("a value in [0, {max}]")
+        } else {
+            "a value >= 0".to_owned()
+        };
+        for (i, x) in v.into_iter().enumerate() {
+            self.within(&format!("{field}[{i}]"), x, 0.0, max, &what)?;
+        }
+        Ok(DVec3::from_array(v).as_vec3())
+    }
+
+    /// A count in `[lo, hi]`.
+    pub fn count(&self, field: &str, v: u32, lo: u32, hi: u32) -> Result<u32, Error> {
+        if (lo..=hi).contains(&v) {
+            Ok(v)
+        } else if hi == u32::MAX {
+            Err(self.err(field, format!("expected an integer >= {lo}, found {v}")))
+        } else {
+            Err(self.err(
+                field,
+                format!("expected an integer in [{lo}, {hi}], found {v}"),
+            ))
+        }
+    }
+
+    /// Checks that `name` is non-empty and not in `seen`, then adds it
+    /// (`what` is "object", "light", ...).
+    pub fn unique_name<'n>(
+        &self,
+        field: &str,
+        name: &'n str,
+        seen: &mut HashSet<&'n str>,
+        what: &str,
+    ) -> Result<(), Error> {
+        if name.trim().is_empty() {
+            return Err(self.err(field, format!("{what} name must not be empty")));
+        }
+        if !seen.insert(name) {
+            return Err(self.err(field, format!("duplicate {what} name \"{name}\"")));
+        }
+        Ok(())
+    }
+
+    /// Wraps an error from a referenced file (an image, a mesh) at `field`.
+    pub fn nested(&self, field: &str, inner: &Error) -> Error {
+        self.err(field, inner.to_string())
+    }
+}

@@ -1,0 +1,282 @@
+//! The forward path tracer: unidirectional, next-event estimation with
+//! multiple importance sampling (power heuristic), Russian roulette, rayon
+//! over tiles, and optional path recording.
+//!
+//! Determinism: every random number comes from [`PixelSampler`], keyed by
+//! `(seed, pixel, sample, dimension)`, and each pixel sums its samples in
+//! order, so an image is bit-identical whatever the thread count.
+//!
+//! Random dimensions: the film position uses dimensions 0–1; bounce `k`
+//! (0-based) uses the block `2 + 8k …`: light selection, light position (2),
+//! lobe choice, direction (2), Russian roulette.
+
+use std::time::Instant;
+
+use glam::{UVec2, Vec3};
+use rayon::prelude::*;
+
+mod path;
+
+use path::{Recording, trace_path};
+
+use crate::film::Image;
+use crate::record::{PathRecord, RecordLevel};
+use crate::sampler::PixelSampler;
+use crate::scene::Scene;
+
+/// Side of the square tiles rendered by one task.
+pub const TILE: u32 = 16;
+const DIMS_PER_BOUNCE: u32 = 8;
+/// Shadow rays stop this fraction short of the light point (relative, so it
+/// works at any scene scale).
+const SHADOW_EPS: f32 = 1e-4;
+
+/// What to render.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RenderOptions {
+    /// Samples per pixel.
+    pub spp: u32,
+    /// Seed of the random streams.
+    pub seed: u32,
+    /// Maximum surface interactions per path.
+    pub max_depth: u32,
+    /// Depth from which Russian roulette runs.
+    pub rr_depth: u32,
+}
+
+impl RenderOptions {
+    /// The scene's own settings.
+    pub fn from_scene(scene: &Scene) -> Self {
+        let s = scene.settings();
+        Self {
+            spp: s.spp,
+            seed: s.seed,
+            max_depth: s.max_depth,
+            rr_depth: s.rr_depth,
+        }
+    }
+}
+
+/// Counters of events the tracer guards against. Each guarded sample or
+/// path is dropped (its remaining contribution is zero) and counted here.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TraceCounters {
+    /// Camera and continuation rays traced (closest hit).
+    pub rays: u64,
+    /// Shadow rays traced.
+    pub shadow_rays: u64,
+    /// Samples whose radiance was NaN or infinite (dropped).
+    pub non_finite: u64,
+    /// Paths ended because the sampled direction lay on the wrong side of the
+    /// geometric normal for its lobe (shading-normal light leak).
+    pub leaks: u64,
+}
+
+impl TraceCounters {
+    fn add(&mut self, o: &TraceCounters) {
+        self.rays += o.rays;
+        self.shadow_rays += o.shadow_rays;
+        self.non_finite += o.non_finite;
+        self.leaks += o.leaks;
+    }
+}
+
+/// A rendered image and how it went.
+#[derive(Clone, Debug)]
+pub struct RenderOutput {
+    /// Linear RGB, the mean of the pixel samples (box filter).
+    pub image: Image,
+    /// Pixel samples traced.
+    pub samples: u64,
+    /// Wall-clock seconds.
+    pub seconds: f64,
+    /// Guard and ray counters.
+    pub counters: TraceCounters,
+}
+
+/// One pixel sample to trace.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PixelSample {
+    /// The pixel.
+    pub pixel: UVec2,
+    /// Sample index within the pixel, `< spp`.
+    pub sample: u32,
+}
+
+/// Renders the scene. `progress` is called (from worker threads) with the
+/// number of pixel samples each finished tile traced.
+pub fn render(
+    scene: &Scene,
+    opts: &RenderOptions,
+    progress: &(dyn Fn(u64) + Sync),
+) -> RenderOutput {
+    render_tiles(scene, opts, None, progress).0
+}
+
+/// Renders the scene and records every pixel sample's path at `level`.
+/// Records are ordered by pixel (row-major), then sample. The image is
+/// bit-identical to [`render`]'s.
+pub fn render_recorded(
+    scene: &Scene,
+    opts: &RenderOptions,
+    level: RecordLevel,
+    progress: &(dyn Fn(u64) + Sync),
+) -> (RenderOutput, Vec<PathRecord>) {
+    render_tiles(scene, opts, Some(level), progress)
+}
+
+/// Traces the given pixel samples (with the random streams of a render with
+/// `opts`) and returns their records in the same order.
+pub fn trace_samples(
+    scene: &Scene,
+    opts: &RenderOptions,
+    samples: &[PixelSample],
+    level: RecordLevel,
+) -> Vec<PathRecord> {
+    samples
+        .par_iter()
+        .map(|s| {
+            let mut counters = TraceCounters::default();
+            let mut rec = PathRecord::default();
+            trace_pixel_sample(
+                scene,
+                opts,
+                s.pixel,
+                s.sample,
+                Some((level, &mut rec)),
+                &mut counters,
+            );
+            rec
+        })
+        .collect()
+}
+
+fn render_tiles(
+    scene: &Scene,
+    opts: &RenderOptions,
+    level: Option<RecordLevel>,
+    progress: &(dyn Fn(u64) + Sync),
+) -> (RenderOutput, Vec<PathRecord>) {
+    let start = Instant::now();
+    let (w, h) = (scene.camera().width, scene.camera().height);
+    let (tx, ty) = (w.div_ceil(TILE), h.div_ceil(TILE));
+    let tiles: Vec<TileOutput> = (0..tx * ty)
+        .into_par_iter()
+        .map(|t| {
+            let out = render_tile(scene, opts, level, UVec2::new(t % tx, t / tx));
+            progress(out.pixels.len() as u64 * opts.spp as u64);
+            out
+        })
+        .collect();
+    let mut image = Image::new(w, h);
+    let mut counters = TraceCounters::default();
+    let mut records = Vec::new();
+    for tile in &tiles {
+        counters.add(&tile.counters);
+        for (pixel, value) in &tile.pixels {
+            image.set(pixel.x, pixel.y, *value);
+        }
+    }
+    if level.is_some() {
+        let mut all: Vec<PathRecord> = tiles.into_iter().flat_map(|t| t.records).collect();
+        all.sort_by_key(|r| (r.pixel.y, r.pixel.x, r.sample));
+        records = all;
+    }
+    let samples = w as u64 * h as u64 * opts.spp as u64;
+    (
+        RenderOutput {
+            image,
+            samples,
+            seconds: start.elapsed().as_secs_f64(),
+            counters,
+        },
+        records,
+    )
+}
+
+struct TileOutput {
+    pixels: Vec<(UVec2, Vec3)>,
+    records: Vec<PathRecord>,
+    counters: TraceCounters,
+}
+
+fn render_tile(
+    scene: &Scene,
+    opts: &RenderOptions,
+    level: Option<RecordLevel>,
+    tile: UVec2,
+) -> TileOutput {
+    let (w, h) = (scene.camera().width, scene.camera().height);
+    let mut out = TileOutput {
+        pixels: Vec::new(),
+        records: Vec::new(),
+        counters: TraceCounters::default(),
+    };
+    for y in tile.y * TILE..((tile.y + 1) * TILE).min(h) {
+        for x in tile.x * TILE..((tile.x + 1) * TILE).min(w) {
+            let pixel = UVec2::new(x, y);
+            let mut sum = Vec3::ZERO;
+            for s in 0..opts.spp {
+                let l = match level {
+                    Some(level) => {
+                        let mut rec = PathRecord::default();
+                        let l = trace_pixel_sample(
+                            scene,
+                            opts,
+                            pixel,
+                            s,
+                            Some((level, &mut rec)),
+                            &mut out.counters,
+                        );
+                        out.records.push(rec);
+                        l
+                    }
+                    None => trace_pixel_sample(scene, opts, pixel, s, None, &mut out.counters),
+                };
+                sum += l;
+            }
+            out.pixels.push((pixel, sum / opts.spp as f32));
+        }
+    }
+    out
+}
+
+/// Traces one pixel sample; returns its radiance (zero, and counted, when it
+/// was not finite).
+fn trace_pixel_sample(
+    scene: &Scene,
+    opts: &RenderOptions,
+    pixel: UVec2,
+    sample: u32,
+    record: Option<(RecordLevel, &mut PathRecord)>,
+    counters: &mut TraceCounters,
+) -> Vec3 {
+    let cam = scene.camera();
+    let mut sampler = PixelSampler::new(opts.seed, pixel.y * cam.width + pixel.x, sample, opts.spp);
+    let film = pixel.as_vec2() + sampler.next_2d();
+    let ray = cam.ray(film);
+    let mut rec = record.map(|(level, rec)| {
+        *rec = PathRecord {
+            pixel,
+            sample,
+            film,
+            ..PathRecord::default()
+        };
+        Recording {
+            level,
+            rec,
+            done: false,
+        }
+    });
+    let l = trace_path(scene, opts, ray, &mut sampler, rec.as_mut(), counters);
+    let l = if l.is_finite() {
+        l
+    } else {
+        counters.non_finite += 1;
+        Vec3::ZERO
+    };
+    if let Some(r) = rec {
+        r.rec.radiance = l;
+    }
+    l
+}
