@@ -130,10 +130,9 @@ pub fn random_scene(rng: &mut Rng) -> Vec<Object> {
         .collect()
 }
 
-/// A closed, watertight unit "cube sphere": the surface of the integer grid
-/// `[-n, n]³` cube, each vertex normalised (a vertex shared by faces is the
-/// same `f32` value on each), `12·n²` outward-facing triangles... per face
-/// `2·(2n)²`.
+/// A closed unit "cube sphere": the surface of the integer grid cube
+/// `[-n, n]³` with each vertex normalised, `48·n²` outward-facing triangles
+/// sharing their vertices (one `f32` position per grid point).
 pub fn cube_sphere(n: i32) -> Mesh {
     let mut mesh = Mesh::default();
     let mut index = std::collections::HashMap::new();
