@@ -1,0 +1,3 @@
+//! Subcommands of the `epsm` binary.
+
+pub mod bench_ot;
