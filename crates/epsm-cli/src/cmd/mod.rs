@@ -1,6 +1,7 @@
 //! One module per command.
 
 pub mod bench;
+pub mod bench_ot;
 pub mod bench_rays;
 pub mod bench_render;
 pub mod render;
