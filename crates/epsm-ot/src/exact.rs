@@ -99,7 +99,7 @@ impl ExactSettings {
                 reason: "must be at least 1",
             });
         }
-        if !(self.tolerance >= 0.0 && self.tolerance.is_finite()) {
+        if !self.tolerance.is_finite() || self.tolerance < 0.0 {
             return Err(OtError::InvalidSetting {
                 key: "exact.tolerance",
                 value: self.tolerance,
@@ -273,6 +273,9 @@ fn best_partners(
         .collect()
 }
 
+/// A candidate edge `(row, column, cost)`.
+type Edge = (u32, u32, f64);
+
 /// For each row, its `per_row` most violated pairs (`c_ij − u_i − v_j < −tolerance`), and the number of pairs evaluated.
 fn violations(
     x: &Clustered,
@@ -281,9 +284,9 @@ fn violations(
     v: &[f64],
     tolerance: f64,
     per_row: usize,
-) -> (Vec<(u32, u32, f64)>, u64) {
+) -> (Vec<Edge>, u64) {
     let sup = Support::truncated(x, &fit_potentials(x, u), y, &fit_potentials(y, v), 0.0);
-    let parts: Vec<(Vec<(u32, u32, f64)>, u64)> = x
+    let parts: Vec<(Vec<Edge>, u64)> = x
         .clusters
         .par_iter()
         .zip(&sup.rows)

@@ -134,20 +134,20 @@ impl SinkhornSettings {
     /// Checks every setting against its documented range.
     pub fn validate(&self) -> Result<(), OtError> {
         let bad = |key, value: f64, reason| Err(OtError::InvalidSetting { key, value, reason });
-        if !(self.blur > 0.0 && self.blur.is_finite()) {
+        if !self.blur.is_finite() || self.blur <= 0.0 {
             return bad("sinkhorn.blur", self.blur, "must be positive and finite");
         }
-        if !(self.scaling > 0.0 && self.scaling < 1.0) {
+        if self.scaling.is_nan() || self.scaling <= 0.0 || self.scaling >= 1.0 {
             return bad("sinkhorn.scaling", self.scaling, "must be in (0, 1)");
         }
-        if !(self.truncation >= 10.0) {
+        if self.truncation.is_nan() || self.truncation < 10.0 {
             return bad(
                 "sinkhorn.truncation",
                 self.truncation,
                 "must be at least 10",
             );
         }
-        if !(self.marginal_tolerance > 0.0) {
+        if self.marginal_tolerance.is_nan() || self.marginal_tolerance <= 0.0 {
             return bad(
                 "sinkhorn.marginal_tolerance",
                 self.marginal_tolerance,
@@ -174,7 +174,7 @@ impl SinkhornSettings {
         if self.cluster_size == 0 {
             return bad("sinkhorn.cluster_size", 0.0, "must be at least 1");
         }
-        if !(self.jump_radii > 0.0) {
+        if self.jump_radii.is_nan() || self.jump_radii <= 0.0 {
             return bad("sinkhorn.jump_radii", self.jump_radii, "must be positive");
         }
         Ok(())

@@ -20,7 +20,7 @@ use rayon::prelude::*;
 use super::SinkhornSettings;
 use crate::blocks::{Clustered, Support, fit_potentials};
 use crate::kernel::{RowSum, stream_row};
-use crate::points::PointCloud;
+use crate::points::{Point, PointCloud};
 
 /// A measure as the kernel sees it: points, their blocks and log-weights.
 struct Level<'a> {
@@ -204,12 +204,12 @@ fn coarse_phase(
     let (cy_cloud, cy_w) = coarse_cloud(y);
     let cx = Level {
         cloud: &cx_cloud,
-        ranges: vec![0..cx_w.len()],
+        ranges: std::iter::once(0..cx_w.len()).collect(),
         log_w: cx_w,
     };
     let cy = Level {
         cloud: &cy_cloud,
-        ranges: vec![0..cy_w.len()],
+        ranges: std::iter::once(0..cy_w.len()).collect(),
         log_w: cy_w,
     };
     let whole = Support::dense(1, 1);
@@ -381,7 +381,7 @@ pub(crate) fn barycentres(
     let (g32, _) = centred(&dual.g);
     let inv_eps = (1.0 / dual.eps) as f32;
     let cols = y.cloud.columns();
-    let parts: Vec<(Vec<([f32; 5], f64)>, u64)> = fx
+    let parts: Vec<(Vec<(Point, f64)>, u64)> = fx
         .ranges
         .par_iter()
         .zip(&dual.support.rows)
