@@ -89,14 +89,20 @@ pub fn run(args: &OtBenchArgs) -> anyhow::Result<()> {
     if args.n == 0 {
         bail!("--n must be at least 1");
     }
-    let (source, target) = synthetic::blobs_pair(args.n, args.seed).context("generating the blobs pair")?;
+    let (source, target) =
+        synthetic::blobs_pair(args.n, args.seed).context("generating the blobs pair")?;
     let matcher = match args.solver {
         OtSolver::Exact => Matcher::exact(),
-        OtSolver::Sinkhorn => Matcher::Sinkhorn(SinkhornSettings { blur: args.blur, ..SinkhornSettings::default() }),
+        OtSolver::Sinkhorn => Matcher::Sinkhorn(SinkhornSettings {
+            blur: args.blur,
+            ..SinkhornSettings::default()
+        }),
         OtSolver::Sliced => Matcher::sliced(),
     };
     let start = Instant::now();
-    let result = matcher.solve(&source, &target).with_context(|| format!("solving with {}", matcher.name()))?;
+    let result = matcher
+        .solve(&source, &target)
+        .with_context(|| format!("solving with {}", matcher.name()))?;
     let seconds = start.elapsed().as_secs_f64();
     let (transport_cost, marginal_error) = match &result.matching {
         Matching::Entropic(plan) => (plan.transport_cost, Some(plan.marginal_error)),
@@ -126,8 +132,12 @@ pub fn run(args: &OtBenchArgs) -> anyhow::Result<()> {
             report.seconds,
             report.loss,
             report.transport_cost,
-            report.marginal_error.map_or("-".into(), |e| format!("{e:.2e}")),
-            report.pair_evals_per_s.map_or("-".into(), |p| format!("{p:.3e}")),
+            report
+                .marginal_error
+                .map_or("-".into(), |e| format!("{e:.2e}")),
+            report
+                .pair_evals_per_s
+                .map_or("-".into(), |p| format!("{p:.3e}")),
             report.peak_rss_mb.map_or("?".into(), |m| format!("{m:.1}")),
         );
     }

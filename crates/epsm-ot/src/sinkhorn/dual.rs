@@ -20,7 +20,7 @@ use rayon::prelude::*;
 use super::SinkhornSettings;
 use crate::blocks::{Clustered, Support, fit_potentials};
 use crate::kernel::{RowSum, stream_row};
-use crate::points::PointCloud;
+use crate::points::{Point, PointCloud};
 
 /// A measure as the kernel sees it: points, their blocks and log-weights.
 struct Level<'a> {
@@ -103,14 +103,13 @@ fn softmin(x: &Level, y: &Level, lists: &[Vec<u32>], g: &[f64], eps: f64) -> (Ve
                 .clone()
                 .map(|i| {
                     let mut acc = RowSum::new();
-                    let blocks = targets.iter().cloned();
                     pairs += stream_row::<false>(
                         &x.cloud.point(i),
                         cols,
                         &y.log_w,
                         &g32,
                         inv_eps,
-                        blocks,
+                        &targets,
                         &mut acc,
                     );
                     -kappa - eps * acc.log_sum()
@@ -176,13 +175,23 @@ impl Loop<'_> {
     }
 }
 
-/// Runs the whole ε-scaling loop for the source `x` and target `y`.
-pub(crate) fn solve_dual(
+/// Potentials after the coarse phase and the jump, and where the schedule resumes.
+struct Coarse {
+    f: Vec<f64>,
+    g: Vec<f64>,
+    eps_list: Vec<f64>,
+    next: usize,
+    pairs: u64,
+    iterations: usize,
+}
+
+/// Steps 1 and 2 of the module doc: the coarse phase and the jump to the points.
+fn coarse_phase(
     x: &Clustered,
     y: &Clustered,
     diameter_sq: f64,
     settings: &SinkhornSettings,
-) -> Dual {
+) -> Coarse {
     let eps_list = schedule(diameter_sq, settings.blur, settings.scaling);
     let mut lp = Loop {
         x,
@@ -191,18 +200,16 @@ pub(crate) fn solve_dual(
         pairs: 0,
         iterations: 0,
     };
-
-    // Coarse phase: dense Sinkhorn on cluster centroids.
     let (cx_cloud, cx_w) = coarse_cloud(x);
     let (cy_cloud, cy_w) = coarse_cloud(y);
     let cx = Level {
         cloud: &cx_cloud,
-        ranges: vec![0..cx_w.len()],
+        ranges: std::iter::once(0..cx_w.len()).collect(),
         log_w: cx_w,
     };
     let cy = Level {
         cloud: &cy_cloud,
-        ranges: vec![0..cy_w.len()],
+        ranges: std::iter::once(0..cy_w.len()).collect(),
         log_w: cy_w,
     };
     let whole = Support::dense(1, 1);
@@ -220,22 +227,83 @@ pub(crate) fn solve_dual(
         lp.step(&cx, &cy, &whole, &mut fc, &mut gc, eps_list[k]);
         k += 1;
     }
-
-    // Jump: extrapolate fine potentials from the coarse ones.
     let eps_jump = eps_list[k - 1];
     let (fx, fy) = (Level::fine(x), Level::fine(y));
     let to_coarse = |n: usize| vec![vec![0u32]; n];
-    let (mut f, p1) = softmin(&fx, &cy, &to_coarse(fx.ranges.len()), &gc, eps_jump);
-    let (mut g, p2) = softmin(&fy, &cx, &to_coarse(fy.ranges.len()), &fc, eps_jump);
-    lp.pairs += p1 + p2;
-
-    // Fine phase: truncated updates down the rest of the schedule.
-    for &eps in &eps_list[k..] {
-        let sup = lp.support(&f, &g, eps);
-        lp.step(&fx, &fy, &sup, &mut f, &mut g, eps);
+    let (f, p1) = softmin(&fx, &cy, &to_coarse(fx.ranges.len()), &gc, eps_jump);
+    let (g, p2) = softmin(&fy, &cx, &to_coarse(fy.ranges.len()), &fc, eps_jump);
+    Coarse {
+        f,
+        g,
+        eps_list,
+        next: k,
+        pairs: lp.pairs + p1 + p2,
+        iterations: lp.iterations,
     }
+}
 
-    // Polish: over-relaxed updates at the final ε until the source marginal is within tolerance.
+/// Runs the whole ε-scaling loop for the source `x` and target `y`.
+pub(crate) fn solve_dual(
+    x: &Clustered,
+    y: &Clustered,
+    diameter_sq: f64,
+    settings: &SinkhornSettings,
+) -> Dual {
+    let Coarse {
+        mut f,
+        mut g,
+        eps_list,
+        next,
+        pairs,
+        iterations,
+    } = coarse_phase(x, y, diameter_sq, settings);
+    let mut lp = Loop {
+        x,
+        y,
+        settings,
+        pairs,
+        iterations,
+    };
+    let (fx, fy) = (Level::fine(x), Level::fine(y));
+
+    // Fine phase: truncated, over-relaxed updates at each remaining scale until its marginal error is small.
+    for &eps in &eps_list[next..] {
+        let sup = lp.support(&f, &g, eps);
+        for _ in 0..settings.max_scale_iterations {
+            let (ft, p1) = softmin(&fx, &fy, &sup.rows, &g, eps);
+            let err = row_marginal_error(&f, &ft, eps);
+            relax(&mut f, &ft, settings.annealing_overrelaxation);
+            let (gt, p2) = softmin(&fy, &fx, &sup.cols, &f, eps);
+            relax(&mut g, &gt, settings.annealing_overrelaxation);
+            lp.pairs += p1 + p2;
+            lp.iterations += 1;
+            if err <= settings.scale_tolerance {
+                break;
+            }
+        }
+    }
+    polish(x, y, f, g, settings, lp.pairs, lp.iterations)
+}
+
+/// Polish: over-relaxed updates at the final ε, from potentials `f, g`, until the source
+/// marginal is within tolerance; `pairs` and `iterations` carry the work done so far.
+pub(crate) fn polish(
+    x: &Clustered,
+    y: &Clustered,
+    mut f: Vec<f64>,
+    mut g: Vec<f64>,
+    settings: &SinkhornSettings,
+    pairs: u64,
+    iterations: usize,
+) -> Dual {
+    let mut lp = Loop {
+        x,
+        y,
+        settings,
+        pairs,
+        iterations,
+    };
+    let (fx, fy) = (Level::fine(x), Level::fine(y));
     let eps = settings.blur * settings.blur;
     let mut omega = settings.overrelaxation;
     let mut support = lp.support(&f, &g, eps);
@@ -313,7 +381,7 @@ pub(crate) fn barycentres(
     let (g32, _) = centred(&dual.g);
     let inv_eps = (1.0 / dual.eps) as f32;
     let cols = y.cloud.columns();
-    let parts: Vec<(Vec<([f32; 5], f64)>, u64)> = fx
+    let parts: Vec<(Vec<(Point, f64)>, u64)> = fx
         .ranges
         .par_iter()
         .zip(&dual.support.rows)
@@ -324,14 +392,13 @@ pub(crate) fn barycentres(
                 .clone()
                 .map(|i| {
                     let mut acc = RowSum::new();
-                    let blocks = targets.iter().cloned();
                     pairs += stream_row::<true>(
                         &x.cloud.point(i),
                         cols,
                         &fy.log_w,
                         &g32,
                         inv_eps,
-                        blocks,
+                        &targets,
                         &mut acc,
                     );
                     acc.barycentre()
