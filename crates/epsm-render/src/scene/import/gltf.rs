@@ -4,7 +4,8 @@
 //! first scene) is flattened into one object-space mesh, with its node's
 //! world transform applied (positions by the matrix, normals by its inverse
 //! transpose, winding reversed under a mirroring transform). Cameras, lights
-//! and materials are ignored. Texture coordinates (set 0) are flipped to
+//! and materials are ignored (a whole glTF scene loads through
+//! [`gltf_scene`](super::gltf_scene), which shares this file's reading). Texture coordinates (set 0) are flipped to
 //! `v = 1 − v` so that `v = 0` is the bottom row, as
 //! [`Image::lookup`](crate::film::Image::lookup) expects. Normals and uvs are
 //! kept when every primitive has them. Only the `TRIANGLES` mode is accepted.
@@ -16,47 +17,125 @@
 //! material = "white"
 //! ```
 
+use std::collections::HashSet;
 use std::path::Path;
 
-use glam::{Mat3, Mat4, Vec2, Vec3};
+use glam::{DAffine3, DMat4, Vec2, Vec3};
+use gltf::accessor::{DataType, Dimensions};
 
-use crate::error::{Result, SceneError};
+use crate::error::{Error, Result, SceneError};
 use crate::scene::Mesh;
 
 /// Reads the glTF or GLB file at `path` into one mesh (not yet validated).
 pub fn load(path: &Path) -> Result<Mesh> {
-    let fail = |field: &str, e: &dyn std::fmt::Display| SceneError::new(path, field, e.to_string());
-    let gltf = gltf::Gltf::open(path).map_err(|e| fail("gltf", &format!("malformed glTF: {e}")))?;
-    let base = path.parent();
-    let buffers = gltf::import_buffers(&gltf.document, base, gltf.blob)
-        .map_err(|e| fail("buffers", &format!("cannot load glTF buffers: {e}")))?;
-    let doc = &gltf.document;
-    let scene = doc
-        .default_scene()
-        .or_else(|| doc.scenes().next())
-        .ok_or_else(|| fail("scenes", &"the file has no scene"))?;
+    let bytes = std::fs::read(path).map_err(|source| Error::Io {
+        path: path.to_owned(),
+        source,
+    })?;
+    let file = open(&bytes, path)?;
     let mut mesh = Mesh::default();
-    let mut stack: Vec<(gltf::Node, Mat4)> = scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
-    while let Some((node, parent)) = stack.pop() {
-        let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
-        if let Some(m) = node.mesh() {
-            for prim in m.primitives() {
-                let field = format!("meshes[{}].primitives[{}]", m.index(), prim.index());
-                let part = primitive(&prim, &buffers, world)
-                    .map_err(|msg| SceneError::new(path, field, msg))?;
-                super::append(&mut mesh, part);
+    for placed in walk(&file.doc, path)? {
+        let Some(m) = placed.node.mesh() else {
+            continue;
+        };
+        let world = DAffine3::from_mat4(placed.world);
+        let linear = world.matrix3.as_mat3();
+        let normal_from_object = linear.inverse().transpose();
+        for prim in m.primitives() {
+            let field = format!("meshes[{}].primitives[{}]", m.index(), prim.index());
+            let mut part =
+                primitive(&prim, &file.buffers).map_err(|msg| SceneError::new(path, field, msg))?;
+            for p in &mut part.positions {
+                *p = world.transform_point3(p.as_dvec3()).as_vec3();
             }
+            for n in &mut part.normals {
+                *n = (normal_from_object * *n).normalize_or_zero();
+            }
+            if linear.determinant() < 0.0 {
+                part.indices.iter_mut().for_each(|t| t.swap(1, 2));
+            }
+            super::append(&mut mesh, part);
         }
-        stack.extend(node.children().map(|c| (c, world)));
     }
     Ok(mesh)
 }
 
-/// One triangle primitive, transformed by `world`; errors are messages.
-fn primitive(
+/// A parsed and validated glTF document with its buffers loaded.
+pub(crate) struct File {
+    /// The document.
+    pub doc: gltf::Document,
+    /// Buffer contents, by buffer index.
+    pub buffers: Vec<gltf::buffer::Data>,
+}
+
+/// Parses `bytes` (JSON glTF or GLB) and loads its buffers (external ones
+/// relative to `file`'s directory).
+pub(crate) fn open(bytes: &[u8], file: &Path) -> Result<File> {
+    let fail = |field: &str, msg: String| Error::from(SceneError::new(file, field, msg));
+    // The gltf crate subtracts the header size from the declared GLB length unchecked.
+    if let Some(len) = bytes.strip_prefix(b"glTF").and_then(|r| r.get(4..8)) {
+        let declared = u32::from_le_bytes([len[0], len[1], len[2], len[3]]);
+        if declared < 12 {
+            return Err(fail("glb", format!("declared length {declared} < 12")));
+        }
+    }
+    let gltf =
+        gltf::Gltf::from_slice(bytes).map_err(|e| fail("gltf", format!("malformed glTF: {e}")))?;
+    let buffers = gltf::import_buffers(&gltf.document, file.parent(), gltf.blob)
+        .map_err(|e| fail("buffers", format!("cannot load glTF buffers: {e}")))?;
+    Ok(File {
+        doc: gltf.document,
+        buffers,
+    })
+}
+
+/// A node of the scene with its world transform (object → world).
+pub(crate) struct Placed<'a> {
+    /// The node.
+    pub node: gltf::Node<'a>,
+    /// Product of the node's and its ancestors' local transforms.
+    pub world: DMat4,
+}
+
+/// The nodes of the default scene (or the first scene), depth-first in file
+/// order. Errors for a missing scene, a node reached twice (a cycle or a
+/// shared child: glTF nodes form a forest) and a non-finite or singular
+/// transform.
+pub(crate) fn walk<'a>(doc: &'a gltf::Document, file: &Path) -> Result<Vec<Placed<'a>>> {
+    let fail = |field: String, msg: &str| Error::from(SceneError::new(file, field, msg));
+    let scene = doc
+        .default_scene()
+        .or_else(|| doc.scenes().next())
+        .ok_or_else(|| fail("scenes".into(), "the file has no scene"))?;
+    let mut seen = HashSet::new();
+    let mut out = Vec::new();
+    let mut stack: Vec<(gltf::Node, DMat4)> = scene.nodes().map(|n| (n, DMat4::IDENTITY)).collect();
+    stack.reverse();
+    while let Some((node, parent)) = stack.pop() {
+        let field = format!("nodes[{}]", node.index());
+        if !seen.insert(node.index()) {
+            let msg = "reached twice: node cycles and shared children are not allowed";
+            return Err(fail(field, msg));
+        }
+        let local = DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)));
+        let world = parent * local;
+        if !world.is_finite() || world.determinant() == 0.0 {
+            return Err(fail(field, "non-finite or singular transform"));
+        }
+        let first_child = stack.len();
+        stack.extend(node.children().map(|c| (c, world)));
+        stack[first_child..].reverse();
+        out.push(Placed { node, world });
+    }
+    Ok(out)
+}
+
+/// One triangle primitive in object space; errors are messages. Every
+/// accessor is checked against its buffer before it is read. Normals are
+/// normalized; texture coordinates (set 0) flipped to `v = 1 − v`.
+pub(crate) fn primitive(
     prim: &gltf::Primitive,
     buffers: &[gltf::buffer::Data],
-    world: Mat4,
 ) -> Result<Mesh, String> {
     if prim.mode() != gltf::mesh::Mode::Triangles {
         return Err(format!(
@@ -64,25 +143,51 @@ fn primitive(
             prim.mode()
         ));
     }
+    let float = [DataType::F32];
+    let position = prim
+        .get(&gltf::Semantic::Positions)
+        .ok_or("the primitive has no POSITION attribute")?;
+    checked(&position, Dimensions::Vec3, &float, buffers)?;
+    if let Some(a) = prim.get(&gltf::Semantic::Normals) {
+        checked(&a, Dimensions::Vec3, &float, buffers)?;
+    }
+    if let Some(a) = prim.get(&gltf::Semantic::TexCoords(0)) {
+        checked(
+            &a,
+            Dimensions::Vec2,
+            &[DataType::F32, DataType::U8, DataType::U16],
+            buffers,
+        )?;
+    }
+    if let Some(a) = prim.indices() {
+        checked(
+            &a,
+            Dimensions::Scalar,
+            &[DataType::U8, DataType::U16, DataType::U32],
+            buffers,
+        )?;
+    }
     let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+    let missing = || "accessor data out of bounds".to_owned();
     let positions: Vec<Vec3> = reader
         .read_positions()
-        .ok_or("the primitive has no POSITION attribute")?
-        .map(|p| world.transform_point3(Vec3::from(p)))
+        .ok_or_else(missing)?
+        .map(Vec3::from)
         .collect();
-    let linear = Mat3::from_mat4(world);
-    let normal_from_object = linear.inverse().transpose();
     let normals = match reader.read_normals() {
         Some(it) => it
-            .map(|n| normal_from_object * Vec3::from(n))
-            .map(|n| n.try_normalize().ok_or("zero or non-finite normal"))
+            .map(|n| {
+                Vec3::from(n)
+                    .try_normalize()
+                    .ok_or("zero or non-finite normal")
+            })
             .collect::<Result<Vec<_>, _>>()?,
         None => Vec::new(),
     };
-    let uvs: Vec<Vec2> = reader
-        .read_tex_coords(0)
-        .map(|t| t.into_f32().map(|[u, v]| Vec2::new(u, 1.0 - v)).collect())
-        .unwrap_or_default();
+    let uvs: Vec<Vec2> = match reader.read_tex_coords(0) {
+        Some(t) => t.into_f32().map(|[u, v]| Vec2::new(u, 1.0 - v)).collect(),
+        None => Vec::new(),
+    };
     let flat: Vec<u32> = match reader.read_indices() {
         Some(i) => i.into_u32().collect(),
         None => (0..positions.len() as u32).collect(),
@@ -90,17 +195,6 @@ fn primitive(
     if !flat.len().is_multiple_of(3) {
         return Err(format!("{} indices do not form triangles", flat.len()));
     }
-    let mirror = linear.determinant() < 0.0;
-    let indices = flat
-        .chunks_exact(3)
-        .map(|t| {
-            if mirror {
-                [t[0], t[2], t[1]]
-            } else {
-                [t[0], t[1], t[2]]
-            }
-        })
-        .collect();
     let complete = |len: usize| len == positions.len();
     Ok(Mesh {
         normals: if complete(normals.len()) {
@@ -109,9 +203,60 @@ fn primitive(
             Vec::new()
         },
         uvs: if complete(uvs.len()) { uvs } else { Vec::new() },
+        indices: flat.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
         positions,
-        indices,
     })
+}
+
+/// Checks that accessor `a` has the expected shape and lies inside its
+/// buffer view and buffer (the gltf crate's reader assumes both).
+fn checked(
+    a: &gltf::Accessor,
+    dims: Dimensions,
+    types: &[DataType],
+    buffers: &[gltf::buffer::Data],
+) -> Result<(), String> {
+    let i = a.index();
+    if a.sparse().is_some() {
+        return Err(format!(
+            "accessors[{i}]: sparse accessors are not supported"
+        ));
+    }
+    if a.dimensions() != dims || !types.contains(&a.data_type()) {
+        return Err(format!(
+            "accessors[{i}]: expected {dims:?} of {types:?}, found {:?} of {:?}",
+            a.dimensions(),
+            a.data_type()
+        ));
+    }
+    let view = a.view().ok_or(format!("accessors[{i}]: no buffer view"))?;
+    let size = a.size();
+    let stride = view.stride().unwrap_or(size);
+    let need = (a.count().checked_sub(1))
+        .and_then(|n| n.checked_mul(stride))
+        .and_then(|n| n.checked_add(a.offset() + size));
+    let view_end = view.offset().checked_add(view.length());
+    let buffer_len = buffers.get(view.buffer().index()).map_or(0, |d| d.0.len());
+    match (need, view_end) {
+        (None, _) => Err(format!(
+            "accessors[{i}]: count {} is zero or too large",
+            a.count()
+        )),
+        _ if stride < size => Err(format!(
+            "accessors[{i}]: byteStride {stride} < element size {size}"
+        )),
+        (Some(n), _) if n > view.length() => Err(format!(
+            "accessors[{i}]: {} items need {n} bytes but bufferViews[{}] holds {}",
+            a.count(),
+            view.index(),
+            view.length()
+        )),
+        (_, end) if end.is_none_or(|e| e > buffer_len) => Err(format!(
+            "bufferViews[{}] ends past its buffer ({buffer_len} bytes)",
+            view.index()
+        )),
+        _ => Ok(()),
+    }
 }
 
 #[cfg(test)]
