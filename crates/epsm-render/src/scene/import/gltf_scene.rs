@@ -128,8 +128,7 @@ struct Pbr {
 
 impl Importer<'_> {
     fn warn(&mut self, field: &str, message: &str) {
-        self.warnings
-            .push(SceneError::new(self.ctx.file, field, message));
+        self.warnings.push(self.ctx.located(field, message));
     }
 
     /// Maps glTF material `m` (its index is its position in `materials`).

@@ -227,13 +227,14 @@ impl<'a> Reader<'a> {
         })
     }
 
-    /// Whether `count` items of at least `min_size` bytes each can still follow.
-    fn can_hold(&self, count: usize, min_size: usize) -> bool {
-        // An ASCII item takes at least one character and one separator per value.
+    /// Whether `count` items can still follow, each at least `bytes` long
+    /// in binary or `values` values long in ASCII (a character and a
+    /// separator per value).
+    fn can_hold(&self, count: usize, bytes: usize, values: usize) -> bool {
         let per_item = if self.format == Format::Ascii {
-            2 * min_size.max(1)
+            2 * values
         } else {
-            min_size
+            bytes
         };
         count
             .checked_mul(per_item)
@@ -249,12 +250,7 @@ fn read_element(e: &Element, r: &mut Reader, mesh: &mut Mesh) -> Result<(), (Str
         .iter()
         .map(|p| p.list_count.unwrap_or(p.value).size())
         .sum::<usize>();
-    let values_per_item = if r.format == Format::Ascii {
-        e.properties.len()
-    } else {
-        min_size
-    };
-    if !r.can_hold(e.count, values_per_item) {
+    if !r.can_hold(e.count, min_size, e.properties.len()) {
         return Err(fail(format!(
             "declares {} items but the file is too short to hold them",
             e.count
@@ -291,7 +287,7 @@ fn read_element(e: &Element, r: &mut Reader, mesh: &mut Mesh) -> Result<(), (Str
             };
             let n = r.next(count_type).ok_or_else(truncated)?;
             let n = as_index(n).ok_or_else(truncated)? as usize;
-            if !r.can_hold(n, p.value.size()) {
+            if !r.can_hold(n, p.value.size(), 1) {
                 return Err(truncated());
             }
             list.clear();
@@ -420,7 +416,7 @@ mod tests {
             .expect_err("bad type")
             .to_string();
         assert!(
-            msg.contains("t.ply:5") && msg.contains("unknown type"),
+            msg.contains("t.ply:6") && msg.contains("unknown type"),
             "{msg}"
         );
     }

@@ -38,11 +38,16 @@ impl Ctx<'_> {
 
     /// An error at `field`, with its line when the file has it.
     pub fn err(&self, field: &str, message: impl Into<String>) -> Error {
+        self.located(field, message).into()
+    }
+
+    /// The located report of `message` at `field` (an error or a warning).
+    pub fn located(&self, field: &str, message: impl Into<String>) -> SceneError {
         let path = self.path(field);
         let line = self.locator.line(&path);
         let mut e = SceneError::new(self.file, path, message);
         e.line = line;
-        e.into()
+        e
     }
 
     /// A path from the file, resolved against the file's directory.
