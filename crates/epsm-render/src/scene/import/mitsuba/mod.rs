@@ -102,8 +102,8 @@ pub fn from_str(text: &str, file: &Path) -> Result<Loaded> {
                 format!("duplicate shape id \"{name}\""),
             ));
         }
-        let placed = shapes.shape(el, &ctx, &mut warnings)?;
         let material = materials.of_shape(el, &name, &defs, &ctx, &mut warnings)?;
+        let placed = shapes.shape(el, &ctx, &mut warnings)?;
         objects.push(Object {
             name,
             mesh: placed.mesh,
