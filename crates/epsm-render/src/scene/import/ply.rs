@@ -123,6 +123,12 @@ struct Header {
 
 /// The header and the body after it; errors are `(line, message)`.
 fn header(bytes: &[u8]) -> Result<(Header, &[u8]), (usize, String)> {
+    if !(bytes.starts_with(b"ply\n") || bytes.starts_with(b"ply\r\n")) {
+        return Err((
+            1,
+            "not a PLY file (the first line must be \"ply\")".to_owned(),
+        ));
+    }
     let end = find(bytes, b"end_header").ok_or((1, "no end_header line".to_owned()))?;
     let body_start = bytes[end..]
         .iter()
@@ -137,7 +143,6 @@ fn header(bytes: &[u8]) -> Result<(Header, &[u8]), (usize, String)> {
         let bad = |msg: &str| (line_no, format!("{msg}: \"{}\"", line.trim()));
         match words.as_slice() {
             ["ply"] if i == 0 => {}
-            _ if i == 0 => return Err(bad("not a PLY file (first line must be \"ply\")")),
             [] | ["comment", ..] | ["obj_info", ..] => {}
             ["format", kind, "1.0"] => {
                 format = Some(match *kind {

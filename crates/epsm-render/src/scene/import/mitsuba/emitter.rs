@@ -79,7 +79,6 @@ pub fn emitter(
             let file = el
                 .string(ctx, "filename")?
                 .ok_or_else(|| ctx.err(&field("filename"), "required"))?;
-            let img = image(&field("filename"), file, ctx, images)?;
             let scale = el.float(ctx, "scale")?.unwrap_or(1.0);
             let scale = ctx.within(&field("scale"), scale, 0.0, f64::MAX, "a value >= 0")?;
             let rotate_y = match el.prop("to_world") {
@@ -91,6 +90,7 @@ pub fn emitter(
                 })?,
                 None => 0.0,
             };
+            let img = image(&field("filename"), file, ctx, images)?;
             let map = EnvMap::new((*img).clone(), scale as f32, rotate_y as f32);
             Emitter::Background(Background::EnvMap(Arc::new(map)))
         }
