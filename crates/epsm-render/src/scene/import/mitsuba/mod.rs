@@ -25,6 +25,7 @@
 pub mod bsdf;
 pub mod emitter;
 pub mod parse;
+pub mod props;
 pub mod sensor;
 pub mod shape;
 pub mod transform;

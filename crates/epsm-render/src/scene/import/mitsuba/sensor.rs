@@ -75,9 +75,12 @@ pub fn sensor(
         }
         _ => return Err(ctx.err(&sensor.path, "expected at most one <film>")),
     };
+    // Mitsuba's defaults: 4 samples, a path integrator of unlimited depth, roulette from depth 5.
     let mut settings = RenderSettings {
         spp: 4,
-        ..RenderSettings::default()
+        max_depth: MAX_DEPTH,
+        rr_depth: 5,
+        seed: 0,
     };
     for sampler in sensor.tagged("sampler") {
         let count = |key: &str, lo: i64| -> Result<Option<u32>> {
@@ -159,10 +162,11 @@ fn depths(
         return Err(ctx.err(&format!("{}.type", el.path), msg));
     }
     let max_field = format!("{}.max_depth", el.path);
-    settings.max_depth = match el.integer(ctx, "max_depth")?.unwrap_or(-1) {
-        -1 => MAX_DEPTH,
-        m if (2..=i64::from(MAX_DEPTH) + 1).contains(&m) => (m - 1) as u32,
-        m => {
+    settings.max_depth = match el.integer(ctx, "max_depth")? {
+        None => settings.max_depth,
+        Some(-1) => MAX_DEPTH,
+        Some(m) if (2..=i64::from(MAX_DEPTH) + 1).contains(&m) => (m - 1) as u32,
+        Some(m) => {
             let msg = format!(
                 "expected -1 or an integer in [2, {}] (1 would show only emitters), found {m}",
                 MAX_DEPTH + 1
@@ -170,9 +174,10 @@ fn depths(
             return Err(ctx.err(&max_field, msg));
         }
     };
-    let rr = el.integer(ctx, "rr_depth")?.unwrap_or(5);
-    let rr = u32::try_from(rr).ok().filter(|&r| r >= 1);
-    settings.rr_depth =
-        rr.ok_or_else(|| ctx.err(&format!("{}.rr_depth", el.path), "expected an integer >= 1"))?;
+    if let Some(rr) = el.integer(ctx, "rr_depth")? {
+        let rr = u32::try_from(rr).ok().filter(|&r| r >= 1);
+        let msg = "expected an integer >= 1";
+        settings.rr_depth = rr.ok_or_else(|| ctx.err(&format!("{}.rr_depth", el.path), msg))?;
+    }
     finish(el, ctx, &[], warnings)
 }

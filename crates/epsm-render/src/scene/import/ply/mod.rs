@@ -20,10 +20,13 @@
 //! material = "white"
 //! ```
 
+mod header;
+
 use std::path::Path;
 
 use glam::{Vec2, Vec3};
 
+use self::header::{Element, Format, Scalar, header};
 use crate::error::{Error, Result, SceneError};
 use crate::scene::Mesh;
 
@@ -53,139 +56,6 @@ pub fn parse(bytes: &[u8], file: &Path) -> Result<Mesh> {
             .map_err(|(field, msg)| err(&field, None, msg))?;
     }
     Ok(mesh)
-}
-
-/// How the body is encoded.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Format {
-    Ascii,
-    Little,
-    Big,
-}
-
-/// A scalar type of the header, by its size in bytes and kind.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Scalar {
-    I8,
-    U8,
-    I16,
-    U16,
-    I32,
-    U32,
-    F32,
-    F64,
-}
-
-impl Scalar {
-    fn parse(name: &str) -> Option<Self> {
-        Some(match name {
-            "char" | "int8" => Self::I8,
-            "uchar" | "uint8" => Self::U8,
-            "short" | "int16" => Self::I16,
-            "ushort" | "uint16" => Self::U16,
-            "int" | "int32" => Self::I32,
-            "uint" | "uint32" => Self::U32,
-            "float" | "float32" => Self::F32,
-            "double" | "float64" => Self::F64,
-            _ => return None,
-        })
-    }
-
-    fn size(self) -> usize {
-        match self {
-            Self::I8 | Self::U8 => 1,
-            Self::I16 | Self::U16 => 2,
-            Self::I32 | Self::U32 | Self::F32 => 4,
-            Self::F64 => 8,
-        }
-    }
-}
-
-/// One property: a scalar, or a list with its count type.
-#[derive(Clone, Debug)]
-struct Property {
-    name: String,
-    value: Scalar,
-    list_count: Option<Scalar>,
-}
-
-#[derive(Clone, Debug)]
-struct Element {
-    name: String,
-    count: usize,
-    properties: Vec<Property>,
-}
-
-struct Header {
-    format: Format,
-    elements: Vec<Element>,
-}
-
-/// The header and the body after it; errors are `(line, message)`.
-fn header(bytes: &[u8]) -> Result<(Header, &[u8]), (usize, String)> {
-    if !(bytes.starts_with(b"ply\n") || bytes.starts_with(b"ply\r\n")) {
-        return Err((
-            1,
-            "not a PLY file (the first line must be \"ply\")".to_owned(),
-        ));
-    }
-    let end = find(bytes, b"end_header").ok_or((1, "no end_header line".to_owned()))?;
-    let body_start = bytes[end..]
-        .iter()
-        .position(|&b| b == b'\n')
-        .map_or(bytes.len(), |i| end + i + 1);
-    let text = std::str::from_utf8(&bytes[..end]).map_err(|_| (1, "header is not text".into()))?;
-    let mut format = None;
-    let mut elements: Vec<Element> = Vec::new();
-    for (i, line) in text.lines().enumerate() {
-        let line_no = i + 1;
-        let words: Vec<&str> = line.split_whitespace().collect();
-        let bad = |msg: &str| (line_no, format!("{msg}: \"{}\"", line.trim()));
-        match words.as_slice() {
-            ["ply"] if i == 0 => {}
-            [] | ["comment", ..] | ["obj_info", ..] => {}
-            ["format", kind, "1.0"] => {
-                format = Some(match *kind {
-                    "ascii" => Format::Ascii,
-                    "binary_little_endian" => Format::Little,
-                    "binary_big_endian" => Format::Big,
-                    _ => return Err(bad("unknown format")),
-                })
-            }
-            ["element", name, count] => elements.push(Element {
-                name: (*name).to_owned(),
-                count: count.parse().map_err(|_| bad("expected a count"))?,
-                properties: Vec::new(),
-            }),
-            ["property", rest @ ..] => {
-                let element = elements
-                    .last_mut()
-                    .ok_or_else(|| bad("property before any element"))?;
-                let scalar = |t: &str| Scalar::parse(t).ok_or_else(|| bad("unknown type"));
-                let property = match rest {
-                    ["list", count, value, name] => Property {
-                        name: (*name).to_owned(),
-                        value: scalar(value)?,
-                        list_count: Some(scalar(count)?),
-                    },
-                    [value, name] => Property {
-                        name: (*name).to_owned(),
-                        value: scalar(value)?,
-                        list_count: None,
-                    },
-                    _ => return Err(bad("malformed property")),
-                };
-                element.properties.push(property);
-            }
-            _ => return Err(bad("unexpected header line")),
-        }
-    }
-    let format = format.ok_or((1, "no format line".to_owned()))?;
-    Ok((Header { format, elements }, &bytes[body_start..]))
-}
-
-fn find(haystack: &[u8], needle: &[u8]) -> Option<usize> {
-    haystack.windows(needle.len()).position(|w| w == needle)
 }
 
 /// Reads scalars from the body, in either encoding.

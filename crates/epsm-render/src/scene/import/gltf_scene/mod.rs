@@ -28,11 +28,15 @@ use std::sync::Arc;
 
 use glam::{DAffine3, DVec3, Vec3};
 
+mod material;
+
+pub use material::SMOOTH_ALPHA;
+
 use super::gltf::{File, Placed, open, primitive, walk};
 use crate::camera::Camera;
 use crate::error::{Error, Result, SceneError};
 use crate::lights::{Background, PointLight};
-use crate::materials::{Bsdf, Conductor, Dielectric, Diffuse, Material, RoughConductor, Texture};
+use crate::materials::Material;
 use crate::scene::load::Loaded;
 use crate::scene::load::Locator;
 use crate::scene::load::build::{View, checked_camera};
@@ -41,8 +45,6 @@ use crate::scene::{Mesh, Object, RenderSettings, SceneParts};
 
 /// Image width when the camera's extras give no resolution, pixels.
 pub const DEFAULT_WIDTH: u32 = 512;
-/// GGX `α` below which a metal is a smooth conductor.
-pub const SMOOTH_ALPHA: f64 = 1e-3;
 /// Luminous efficacy converting candela to W/sr (the SI definition at 555 nm).
 pub const LUMENS_PER_WATT: f64 = 683.0;
 
@@ -114,134 +116,9 @@ struct Importer<'a> {
     emission: Vec<Option<Vec3>>,
 }
 
-/// The metallic-roughness parameters of one glTF material.
-struct Pbr {
-    name: String,
-    base: [f64; 3],
-    metallic: f64,
-    roughness: f64,
-    transmission: f64,
-    ior: f64,
-    emission: [f64; 3],
-    double_sided: bool,
-}
-
 impl Importer<'_> {
     fn warn(&mut self, field: &str, message: &str) {
         self.warnings.push(self.ctx.located(field, message));
-    }
-
-    /// Maps glTF material `m` (its index is its position in `materials`).
-    fn material(&mut self, m: &gltf::Material) -> Result<()> {
-        let i = self.materials.len();
-        let pbr = m.pbr_metallic_roughness();
-        let textures = [
-            pbr.base_color_texture().is_some(),
-            pbr.metallic_roughness_texture().is_some(),
-            m.normal_texture().is_some(),
-            m.emissive_texture().is_some(),
-        ];
-        if textures.contains(&true) {
-            let msg = "textures are skipped: the constant factors are used";
-            self.warn(&format!("materials[{i}]"), msg);
-        }
-        let [r, g, b, _] = pbr.base_color_factor().map(f64::from);
-        let strength = f64::from(m.emissive_strength().unwrap_or(1.0));
-        self.push(&Pbr {
-            name: m
-                .name()
-                .map_or_else(|| format!("material{i}"), str::to_owned),
-            base: [r, g, b],
-            metallic: f64::from(pbr.metallic_factor()),
-            roughness: f64::from(pbr.roughness_factor()),
-            transmission: m
-                .transmission()
-                .map_or(0.0, |t| f64::from(t.transmission_factor())),
-            ior: f64::from(m.ior().unwrap_or(1.5)),
-            emission: m.emissive_factor().map(|e| f64::from(e) * strength),
-            double_sided: m.double_sided(),
-        })
-    }
-
-    /// Checks and appends one material (see the module table).
-    fn push(&mut self, p: &Pbr) -> Result<()> {
-        let ctx = self.ctx;
-        let field = format!("materials[{}]", self.materials.len());
-        let f = |key: &str| format!("{field}.{key}");
-        if self.materials.iter().any(|m| m.name == p.name) {
-            return Err(ctx.err(
-                &f("name"),
-                format!("duplicate material name \"{}\"", p.name),
-            ));
-        }
-        let tint = ctx.color(&f("pbrMetallicRoughness.baseColorFactor"), p.base, 1.0)?;
-        let metallic = ctx.within(
-            &f("metallicFactor"),
-            p.metallic,
-            0.0,
-            1.0,
-            "a value in [0, 1]",
-        )?;
-        let roughness = ctx.within(
-            &f("roughnessFactor"),
-            p.roughness,
-            0.0,
-            1.0,
-            "a value in [0, 1]",
-        )?;
-        let transmission = ctx.within(
-            &f("transmissionFactor"),
-            p.transmission,
-            0.0,
-            1.0,
-            "a value in [0, 1]",
-        )?;
-        let alpha = roughness * roughness;
-        let bsdf = if transmission >= 0.5 {
-            Bsdf::Dielectric(Dielectric {
-                ior: ctx.ior(&f("extensions.KHR_materials_ior.ior"), p.ior)?,
-            })
-        } else if metallic >= 0.5 && alpha < SMOOTH_ALPHA {
-            Bsdf::Conductor(Conductor { tint })
-        } else if metallic >= 0.5 {
-            Bsdf::RoughConductor(RoughConductor {
-                alpha: ctx.alpha(&f("roughnessFactor"), alpha)?,
-                tint,
-            })
-        } else {
-            Bsdf::Diffuse(Diffuse {
-                albedo: Texture::Constant(tint),
-            })
-        };
-        let emission = ctx.color(&f("emissiveFactor"), p.emission, f64::INFINITY)?;
-        self.materials.push(Material {
-            name: p.name.clone(),
-            two_sided: p.double_sided || matches!(bsdf, Bsdf::Dielectric(_)),
-            bsdf,
-        });
-        self.emission
-            .push((emission != Vec3::ZERO).then_some(emission));
-        Ok(())
-    }
-
-    /// The index of glTF's default material (white, metallic 1, roughness 1),
-    /// appended on first use.
-    fn default_material(&mut self) -> Result<u32> {
-        const NAME: &str = "gltf_default";
-        if let Some(i) = self.materials.iter().position(|m| m.name == NAME) {
-            return Ok(i as u32);
-        }
-        self.push(&Pbr {
-            name: NAME.to_owned(),
-            base: [1.0; 3],
-            metallic: 1.0,
-            roughness: 1.0,
-            transmission: 0.0,
-            ior: 1.5,
-            emission: [0.0; 3],
-            double_sided: false,
-        })?;
-        Ok(self.materials.len() as u32 - 1)
     }
 
     /// The first perspective camera in node order, placed by its node.
