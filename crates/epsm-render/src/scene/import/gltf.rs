@@ -79,14 +79,29 @@ pub(crate) fn open(bytes: &[u8], file: &Path) -> Result<File> {
             return Err(fail("glb", format!("declared length {declared} < 12")));
         }
     }
-    let gltf =
-        gltf::Gltf::from_slice(bytes).map_err(|e| fail("gltf", format!("malformed glTF: {e}")))?;
-    let buffers = gltf::import_buffers(&gltf.document, file.parent(), gltf.blob)
+    let malformed = |e: gltf::Error| fail("gltf", format!("malformed glTF: {e}"));
+    let gltf = gltf::Gltf::from_slice_without_validation(bytes).map_err(malformed)?;
+    let json = gltf.document.into_json();
+    // The gltf-json validator indexes POSITION accessors before checking them (found by fuzzing).
+    for (m, mesh) in json.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            if let Some(a) = prim
+                .attributes
+                .values()
+                .find(|a| a.value() >= json.accessors.len())
+            {
+                let field = format!("meshes[{m}].primitives[{p}].attributes");
+                return Err(fail(
+                    &field,
+                    format!("accessor {} does not exist", a.value()),
+                ));
+            }
+        }
+    }
+    let doc = gltf::Document::from_json(json).map_err(malformed)?;
+    let buffers = gltf::import_buffers(&doc, file.parent(), gltf.blob)
         .map_err(|e| fail("buffers", format!("cannot load glTF buffers: {e}")))?;
-    Ok(File {
-        doc: gltf.document,
-        buffers,
-    })
+    Ok(File { doc, buffers })
 }
 
 /// A node of the scene with its world transform (object → world).
