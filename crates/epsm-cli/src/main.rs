@@ -23,6 +23,8 @@ struct Cli {
 enum Command {
     /// Render a scene file to an EXR (linear) or PNG (sRGB) image.
     Render(cmd::render::RenderArgs),
+    /// Validate manifold derivatives of traced paths against Newton re-solves.
+    Check(cmd::check::CheckArgs),
     /// Measure performance (renderer, BVH, matching) and print the numbers.
     #[command(subcommand)]
     Bench(cmd::bench::BenchCommand),
@@ -32,6 +34,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Render(args) => cmd::render::run(args),
+        Command::Check(args) => cmd::check::run(args),
         Command::Bench(b) => cmd::bench::run(b),
     };
     match result {

@@ -5,6 +5,8 @@
 pub enum BenchCommand {
     /// Path-tracing throughput on scene files.
     Render(super::bench_render::RenderBenchArgs),
+    /// Adjoint manifold solves per second by path type and length.
+    Manifold(super::bench_manifold::ManifoldBenchArgs),
     /// BVH build and update time and closest-hit / occlusion rays per second
     /// on a bumpy sphere (coherent and incoherent rays, 1 and all threads).
     Rays(super::bench_rays::RaysBenchArgs),
@@ -14,6 +16,7 @@ pub enum BenchCommand {
 pub fn run(cmd: &BenchCommand) -> anyhow::Result<()> {
     match cmd {
         BenchCommand::Render(a) => super::bench_render::run(a),
+        BenchCommand::Manifold(a) => super::bench_manifold::run(a),
         BenchCommand::Rays(a) => super::bench_rays::run(a),
     }
 }

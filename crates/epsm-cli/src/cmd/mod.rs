@@ -1,8 +1,10 @@
 //! One module per command.
 
 pub mod bench;
+pub mod bench_manifold;
 pub mod bench_rays;
 pub mod bench_render;
+pub mod check;
 pub mod render;
 
 /// Runs `f` on a rayon pool of `threads` threads (all cores when `None`).

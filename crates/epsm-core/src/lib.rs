@@ -1,0 +1,67 @@
+//! # epsm-core: extended path space manifold derivatives
+//!
+//! How the screen position `p` of a traced path's visible effect moves when
+//! scene parameters θ change (Xing et al., "Extended Path Space Manifolds for
+//! Physically Based Differentiable Rendering", SIGGRAPH Asia 2023; DESIGN §5).
+//! A recorded path ([`epsm_render::record::PathRecord`]) is classified into
+//! differentiable paths ([`paths::classify`]); each gets geometric constraints
+//! `C(u, θ) = 0` on its unknown vertices, and the implicit function theorem
+//! gives `du/dθ = −A⁻¹B` with `A = ∂C/∂u`, `B = ∂C/∂θ`. [`solve::solve_adjoint`]
+//! does one transposed solve per path for a loss gradient `g = ∂L/∂p`;
+//! [`solve::solve_forward`] returns the full `dp/dθ`; [`newton`] re-solves
+//! `C = 0` at perturbed θ and is the oracle both are checked against
+//! ([`check`]).
+//!
+//! ## Conventions
+//! - **Units**: lengths in scene units; parameter values in user units
+//!   (translations in scene units, rotations in **degrees**, scale as a factor,
+//!   colours and roughness in their own units). Derivatives are per user unit:
+//!   `dp/dθ` is in pixels per scene unit, pixels per degree, and so on.
+//! - **Pixels**: film coordinates of `epsm-render` (pixel `(0, 0)` top-left,
+//!   `y` down), through [`epsm_render::Camera`]'s pinhole projection π.
+//! - **Vertices**: a path is `x0` (the camera) `x1 … xn`. An *unknown* vertex
+//!   lies on a triangle and is addressed by tangent coordinates `u = (u1, u2)`
+//!   in that triangle's plane ([`vertex`]): at the base configuration θ₀,
+//!   `∂x/∂u` is orthonormal whatever the triangle's size or shape. A *fixed*
+//!   vertex (the camera, the diffuse vertex ending a chain, light points,
+//!   occluder points) is no unknown: it moves rigidly with its object.
+//! - **Directions** follow `epsm-render`: at vertex `i`,
+//!   `wi = normalize(x_{i−1} − x_i)`, `wo = normalize(x_{i+1} − x_i)`.
+//! - **Frames**: each constrained vertex keeps the Duff frame `(s₀, t₀)` of its
+//!   base shading normal `n₀` and transports it by the minimal rotation
+//!   `n₀ → n` ([`frame`]); `[F·w]_xy = (s·w, t·w)`.
+//! - **Constraints** (one 2-D constraint per unknown vertex, [`constraints`]):
+//!   *half vector* `[F·(wi + η wo)]_xy = 0` at smooth specular vertices (η = 1
+//!   for reflection, the record's relative IOR for refraction; unnormalised);
+//!   *glossy* `[F·normalize(wi + wo)]_xy = m_xy` (the microfacet normal kept);
+//!   *fixed direction* `[F·wo]_xy = c` at a caustic receiver (light keeps
+//!   arriving from the same local direction); *collinear*
+//!   `[F·(normalize(o − x) − normalize(y − x))]_xy = 0` at a shadow receiver
+//!   (it stays on the line from the light point `y` through the occluder `o`).
+//! - **Precision**: everything here is `f64`, recomputed from the meshes and
+//!   transforms, never from the `f32` record positions.
+//! - **Robustness** (DESIGN §6): a path that cannot be differentiated reliably
+//!   is dropped with a [`drops::DropReason`] and counted; nothing is clipped or
+//!   scrubbed.
+
+pub mod check;
+pub mod constraints;
+pub mod drops;
+pub mod error;
+pub mod frame;
+pub mod motion;
+pub mod newton;
+pub mod params;
+pub mod paths;
+pub mod pixel;
+pub mod solve;
+#[cfg(test)]
+mod testing;
+pub mod vertex;
+
+pub use drops::{DropCounts, DropReason, Dropped};
+pub use error::{Error, Result};
+pub use motion::Motion;
+pub use params::ParamTable;
+pub use paths::{DiffPath, PathKind, classify};
+pub use solve::{Gradient, PixelJacobian, SolveSettings, solve_adjoint, solve_forward};

@@ -1,0 +1,159 @@
+//! Parameter keys: what each `"<name>.<field>"` drives, and how a key is
+//! resolved against the scene's objects, point lights and materials.
+
+use epsm_render::scene::{MaterialId, ObjectId};
+
+use crate::error::{Error, Result};
+
+/// What one parameter drives.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Target {
+    /// Translation of an object along world axis `0..3`.
+    Translate {
+        /// The object.
+        object: ObjectId,
+        /// World axis: 0 = x, 1 = y, 2 = z.
+        axis: usize,
+    },
+    /// Rotation of an object about world axis `0..3` through its pivot (degrees).
+    Rotate {
+        /// The object.
+        object: ObjectId,
+        /// World axis: 0 = x, 1 = y, 2 = z.
+        axis: usize,
+    },
+    /// Uniform scale of an object about its pivot.
+    Scale {
+        /// The object.
+        object: ObjectId,
+    },
+    /// Translation of a point light along a world axis.
+    LightTranslate {
+        /// Index in the scene's point lights.
+        light: usize,
+        /// World axis.
+        axis: usize,
+    },
+    /// Translation of the camera along a world axis.
+    CameraTranslate {
+        /// World axis.
+        axis: usize,
+    },
+    /// Camera yaw about world `+y` (degrees).
+    CameraYaw,
+    /// Camera pitch about the file camera's right axis (degrees).
+    CameraPitch,
+    /// One channel (0 = r) of a diffuse material's constant albedo.
+    Albedo {
+        /// The material.
+        material: MaterialId,
+        /// Channel 0..3.
+        channel: usize,
+    },
+    /// GGX roughness of a rough conductor.
+    Alpha {
+        /// The material.
+        material: MaterialId,
+    },
+    /// IOR of a dielectric.
+    Ior {
+        /// The material.
+        material: MaterialId,
+    },
+    /// Scale of an object's emitted radiance.
+    Emission {
+        /// The object.
+        object: ObjectId,
+    },
+}
+
+/// The names a key can refer to.
+#[derive(Clone, Debug)]
+pub(super) struct Names {
+    pub(super) objects: Vec<String>,
+    pub(super) lights: Vec<String>,
+    pub(super) materials: Vec<String>,
+    pub(super) object_materials: Vec<MaterialId>,
+}
+
+pub(super) const AXES: [&str; 3] = ["x", "y", "z"];
+
+/// Resolves `key` against the scene's names.
+pub(super) fn parse(names: &Names, key: &str) -> Result<Target> {
+    let err = |message: &str| Error::Param {
+        key: key.to_owned(),
+        message: message.to_owned(),
+    };
+    let (name, field) = FIELDS
+        .iter()
+        .find_map(|f| {
+            key.strip_suffix(f)
+                .and_then(|n| n.strip_suffix('.'))
+                .map(|n| (n, *f))
+        })
+        .ok_or_else(|| {
+            err(&format!(
+                "unknown field; expected one of {}",
+                FIELDS.join(", ")
+            ))
+        })?;
+    let axis = AXES.iter().position(|a| field.ends_with(&format!(".{a}")));
+    let channel = ["r", "g", "b"]
+        .iter()
+        .position(|c| field.ends_with(&format!(".{c}")));
+    let find = |list: &[String]| list.iter().position(|n| n == name);
+    let object = find(&names.objects).map(|i| i as ObjectId);
+    let material = object
+        .map(|o| names.object_materials[o as usize])
+        .or_else(|| find(&names.materials).map(|i| i as MaterialId));
+    let target = match (field.split('.').next(), axis, channel) {
+        (Some("translate"), Some(axis), _) if name == "camera" => Target::CameraTranslate { axis },
+        (Some("yaw"), ..) if name == "camera" => Target::CameraYaw,
+        (Some("pitch"), ..) if name == "camera" => Target::CameraPitch,
+        (Some("translate"), Some(axis), _) => match (object, find(&names.lights)) {
+            (Some(object), _) => Target::Translate { object, axis },
+            (None, Some(light)) => Target::LightTranslate { light, axis },
+            _ => return Err(err("no object or point light has this name")),
+        },
+        (Some("rotate"), Some(axis), _) => Target::Rotate {
+            object: object.ok_or_else(|| err("no object has this name"))?,
+            axis,
+        },
+        (Some("scale"), ..) => Target::Scale {
+            object: object.ok_or_else(|| err("no object has this name"))?,
+        },
+        (Some("emission"), ..) => Target::Emission {
+            object: object.ok_or_else(|| err("no object has this name"))?,
+        },
+        (Some("albedo"), _, Some(channel)) => Target::Albedo {
+            material: material.ok_or_else(|| err("no object or material has this name"))?,
+            channel,
+        },
+        (Some("alpha"), ..) => Target::Alpha {
+            material: material.ok_or_else(|| err("no object or material has this name"))?,
+        },
+        (Some("ior"), ..) => Target::Ior {
+            material: material.ok_or_else(|| err("no object or material has this name"))?,
+        },
+        _ => return Err(err("this field does not apply to this name")),
+    };
+    Ok(target)
+}
+
+const FIELDS: [&str; 15] = [
+    "translate.x",
+    "translate.y",
+    "translate.z",
+    "rotate.x",
+    "rotate.y",
+    "rotate.z",
+    "scale",
+    "yaw",
+    "pitch",
+    "albedo.r",
+    "albedo.g",
+    "albedo.b",
+    "alpha",
+    "ior",
+    "emission",
+];
