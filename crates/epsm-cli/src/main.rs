@@ -23,6 +23,8 @@ struct Cli {
 enum Command {
     /// Render a scene file to an EXR (linear) or PNG (sRGB) image.
     Render(cmd::render::RenderArgs),
+    /// Optimize scene parameters to match a target (docs/problem-format.md).
+    Optimize(cmd::optimize::OptimizeArgs),
     /// Validate manifold derivatives of traced paths against Newton re-solves.
     Check(cmd::check::CheckArgs),
     /// Measure performance (renderer, BVH, matching) and print the numbers.
@@ -34,6 +36,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Render(args) => cmd::render::run(args),
+        Command::Optimize(args) => cmd::optimize::run(args),
         Command::Check(args) => cmd::check::run(args),
         Command::Bench(b) => cmd::bench::run(b),
     };

@@ -234,7 +234,9 @@ mod tests {
         let at = |d: f32| {
             let mut bumped = img.clone();
             bumped.pixels[5].x += d;
-            evaluate(LossKind::L2, &bumped, &target, 1.0).expect("loss").value
+            evaluate(LossKind::L2, &bumped, &target, 1.0)
+                .expect("loss")
+                .value
         };
         let fd = (at(h) - at(-h)) / f64::from(2.0 * h);
         assert!((fd - f64::from(e.g_rgb[5].x)).abs() < 1e-3 * fd.abs().max(1e-3));

@@ -49,7 +49,11 @@ impl Clustered {
         let cols = cloud.columns();
         let key = |i: usize| -> u64 {
             (0..DIM).fold(0u64, |k, d| {
-                let q = if width > 0.0 { ((cols[d][i] - lo[d]) / width) as u64 } else { 0 };
+                let q = if width > 0.0 {
+                    ((cols[d][i] - lo[d]) / width) as u64
+                } else {
+                    0
+                };
                 (k << 12) | q.min(4095)
             })
         };
@@ -61,11 +65,19 @@ impl Clustered {
         let mut start = 0;
         while start < n {
             let k = keys[order[start] as usize];
-            let end = start + order[start..].iter().take_while(|&&i| keys[i as usize] == k).count();
+            let end = start
+                + order[start..]
+                    .iter()
+                    .take_while(|&&i| keys[i as usize] == k)
+                    .count();
             clusters.push(make_cluster(&cloud, start..end));
             start = end;
         }
-        Self { cloud, order, clusters }
+        Self {
+            cloud,
+            order,
+            clusters,
+        }
     }
 
     /// Ranges of all clusters, in order.
@@ -86,12 +98,27 @@ impl Clustered {
 fn make_cluster(cloud: &PointCloud, range: Range<usize>) -> Cluster {
     let cols = cloud.columns();
     let len = range.len() as f64;
-    let centroid: [f64; DIM] = std::array::from_fn(|d| cols[d][range.clone()].iter().map(|&v| f64::from(v)).sum::<f64>() / len);
+    let centroid: [f64; DIM] = std::array::from_fn(|d| {
+        cols[d][range.clone()]
+            .iter()
+            .map(|&v| f64::from(v))
+            .sum::<f64>()
+            / len
+    });
     let radius = range
         .clone()
-        .map(|i| (0..DIM).map(|d| (f64::from(cols[d][i]) - centroid[d]).powi(2)).sum::<f64>().sqrt())
+        .map(|i| {
+            (0..DIM)
+                .map(|d| (f64::from(cols[d][i]) - centroid[d]).powi(2))
+                .sum::<f64>()
+                .sqrt()
+        })
         .fold(0.0, f64::max);
-    Cluster { range, centroid, radius: radius * (1.0 + 1e-9) + 1e-12 }
+    Cluster {
+        range,
+        centroid,
+        radius: radius * (1.0 + 1e-9) + 1e-12,
+    }
 }
 
 /// Linear model of a potential over one cluster with its largest residual.
@@ -128,9 +155,15 @@ pub(crate) fn fit_potentials(clustered: &Clustered, potential: &[f64]) -> Vec<Po
             let max_residual = c
                 .range
                 .clone()
-                .map(|i| potential[i] - mean - (0..DIM).map(|d| slope[d] * delta(i, d)).sum::<f64>())
+                .map(|i| {
+                    potential[i] - mean - (0..DIM).map(|d| slope[d] * delta(i, d)).sum::<f64>()
+                })
                 .fold(f64::NEG_INFINITY, f64::max);
-            PotentialFit { mean, slope, max_residual }
+            PotentialFit {
+                mean,
+                slope,
+                max_residual,
+            }
         })
         .collect()
 }
@@ -155,7 +188,11 @@ fn solve_spd(mut a: [[f64; DIM]; DIM], mut b: [f64; DIM]) -> [f64; DIM] {
         let s: f64 = (k + 1..DIM).map(|c| a[k][c] * x[c]).sum();
         x[k] = (b[k] - s) / a[k][k];
     }
-    if x.iter().all(|v| v.is_finite()) { x } else { [0.0; DIM] }
+    if x.iter().all(|v| v.is_finite()) {
+        x
+    } else {
+        [0.0; DIM]
+    }
 }
 
 /// Lower bound on `c_ij − f_i − g_j` over all `i ∈ I`, `j ∈ J` (see the module doc).
@@ -165,7 +202,13 @@ fn pair_bound(ci: &Cluster, fi: &PotentialFit, cj: &Cluster, gj: &PotentialFit) 
     let dist_sq: f64 = delta.iter().map(|t| t * t).sum();
     let src_tilt = norm(std::array::from_fn(|d| 2.0 * delta[d] - fi.slope[d]));
     let dst_tilt = norm(std::array::from_fn(|d| 2.0 * delta[d] + gj.slope[d]));
-    dist_sq - fi.mean - gj.mean - src_tilt * ci.radius - dst_tilt * cj.radius - fi.max_residual - gj.max_residual
+    dist_sq
+        - fi.mean
+        - gj.mean
+        - src_tilt * ci.radius
+        - dst_tilt * cj.radius
+        - fi.max_residual
+        - gj.max_residual
 }
 
 /// For each source cluster, the target clusters whose reduced-cost bound is at most `threshold`.
@@ -183,11 +226,22 @@ fn kept_pairs(
         .par_iter()
         .zip(f)
         .map(|(ci, fi)| {
-            let bounds = dst.clusters.iter().zip(g).map(|(cj, gj)| pair_bound(ci, fi, cj, gj));
-            let kept: Vec<u32> =
-                bounds.clone().enumerate().filter(|(_, b)| *b <= threshold).map(|(j, _)| j as u32).collect();
+            let bounds = dst
+                .clusters
+                .iter()
+                .zip(g)
+                .map(|(cj, gj)| pair_bound(ci, fi, cj, gj));
+            let kept: Vec<u32> = bounds
+                .clone()
+                .enumerate()
+                .filter(|(_, b)| *b <= threshold)
+                .map(|(j, _)| j as u32)
+                .collect();
             if kept.is_empty() {
-                let best = bounds.enumerate().min_by(|a, b| a.1.total_cmp(&b.1)).map_or(0, |(j, _)| j as u32);
+                let best = bounds
+                    .enumerate()
+                    .min_by(|a, b| a.1.total_cmp(&b.1))
+                    .map_or(0, |(j, _)| j as u32);
                 vec![best]
             } else {
                 kept
@@ -216,11 +270,22 @@ impl Support {
     }
 
     /// The block pairs whose reduced-cost bound is at most `threshold`.
-    pub fn truncated(src: &Clustered, f: &[PotentialFit], dst: &Clustered, g: &[PotentialFit], threshold: f64) -> Self {
+    pub fn truncated(
+        src: &Clustered,
+        f: &[PotentialFit],
+        dst: &Clustered,
+        g: &[PotentialFit],
+        threshold: f64,
+    ) -> Self {
         let mut rows = kept_pairs(src, f, dst, g, threshold);
         let mut cols = transpose(&rows, dst.clusters.len());
         let mut patched = false;
-        let empty: Vec<usize> = cols.iter().enumerate().filter(|(_, c)| c.is_empty()).map(|(j, _)| j).collect();
+        let empty: Vec<usize> = cols
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| c.is_empty())
+            .map(|(j, _)| j)
+            .collect();
         for j in empty {
             let best = src
                 .clusters

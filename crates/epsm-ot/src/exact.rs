@@ -56,7 +56,11 @@ impl Default for ExactSettings {
             dense_below: 64,
             candidates: 8,
             tolerance: 1e-11,
-            warm_start: SinkhornSettings { marginal_tolerance: 1e-2, max_polish_iterations: 50, ..SinkhornSettings::default() },
+            warm_start: SinkhornSettings {
+                marginal_tolerance: 1e-2,
+                max_polish_iterations: 50,
+                ..SinkhornSettings::default()
+            },
         }
     }
 }
@@ -64,23 +68,38 @@ impl Default for ExactSettings {
 impl ExactSettings {
     /// Always use the sparse solver with its optimality check (used by tests on tiny clouds).
     pub fn sparse_only() -> Self {
-        Self { dense_below: 0, ..Self::default() }
+        Self {
+            dense_below: 0,
+            ..Self::default()
+        }
     }
 
     /// Checks every setting against its documented range.
     pub fn validate(&self) -> Result<(), OtError> {
         if self.candidates == 0 {
-            return Err(OtError::InvalidSetting { key: "exact.candidates", value: 0.0, reason: "must be at least 1" });
+            return Err(OtError::InvalidSetting {
+                key: "exact.candidates",
+                value: 0.0,
+                reason: "must be at least 1",
+            });
         }
         if !(self.tolerance >= 0.0 && self.tolerance.is_finite()) {
-            return Err(OtError::InvalidSetting { key: "exact.tolerance", value: self.tolerance, reason: "must be finite and non-negative" });
+            return Err(OtError::InvalidSetting {
+                key: "exact.tolerance",
+                value: self.tolerance,
+                reason: "must be finite and non-negative",
+            });
         }
         self.warm_start.validate()
     }
 }
 
 /// Solves the exact assignment problem from `source` to `target`.
-pub fn solve(source: &PointCloud, target: &PointCloud, settings: &ExactSettings) -> Result<OtResult, OtError> {
+pub fn solve(
+    source: &PointCloud,
+    target: &PointCloud,
+    settings: &ExactSettings,
+) -> Result<OtResult, OtError> {
     settings.validate()?;
     let n = check_pair(source, target)?;
     if n < settings.dense_below.max(2) {
@@ -92,10 +111,16 @@ pub fn solve(source: &PointCloud, target: &PointCloud, settings: &ExactSettings)
     // Warm start and candidate graph.
     let dual = solve_dual(&x, &y, diameter_sq(source, target), &settings.warm_start);
     let (f, g) = (dual.f, dual.g);
-    let mut stats = SolveStats { pair_evaluations: dual.pairs, ..SolveStats::default() };
+    let mut stats = SolveStats {
+        pair_evaluations: dual.pairs,
+        ..SolveStats::default()
+    };
     let k = settings.candidates;
     let mut edges = best_partners(&x, &y, &dual.support.rows, &g, k);
-    for (j, row) in best_partners(&y, &x, &dual.support.cols, &f, k).into_iter().enumerate() {
+    for (j, row) in best_partners(&y, &x, &dual.support.cols, &f, k)
+        .into_iter()
+        .enumerate()
+    {
         for (i, c) in row {
             edges[i as usize].push((j as u32, c));
         }
@@ -111,12 +136,22 @@ pub fn solve(source: &PointCloud, target: &PointCloud, settings: &ExactSettings)
         stats.iterations += 1;
         for i in lsap.free_rows() {
             if !lsap.augment(i) {
-                let full: Vec<(u32, u32, f64)> =
-                    (0..n).map(|j| (i as u32, j as u32, sq_dist_f64(&x.cloud.point(i), &y.cloud.point(j)))).collect();
+                let full: Vec<(u32, u32, f64)> = (0..n)
+                    .map(|j| {
+                        (
+                            i as u32,
+                            j as u32,
+                            sq_dist_f64(&x.cloud.point(i), &y.cloud.point(j)),
+                        )
+                    })
+                    .collect();
                 stats.pair_evaluations += n as u64;
                 lsap.add_edges(&full);
                 let matched = lsap.augment(i);
-                debug_assert!(matched, "a row with edges to every column always reaches a free column");
+                debug_assert!(
+                    matched,
+                    "a row with edges to every column always reaches a free column"
+                );
             }
         }
         let (violations, checked) = violations(&x, &y, &lsap.u, &lsap.v, settings.tolerance);
@@ -137,7 +172,13 @@ pub fn solve(source: &PointCloud, target: &PointCloud, settings: &ExactSettings)
 }
 
 /// For each point of `x`, the `k` points of `y` with the smallest `c_ij − pot_j` inside the listed blocks.
-fn best_partners(x: &Clustered, y: &Clustered, lists: &[Vec<u32>], pot: &[f64], k: usize) -> Vec<Vec<(u32, f64)>> {
+fn best_partners(
+    x: &Clustered,
+    y: &Clustered,
+    lists: &[Vec<u32>],
+    pot: &[f64],
+    k: usize,
+) -> Vec<Vec<(u32, f64)>> {
     x.clusters
         .par_iter()
         .zip(lists)
@@ -154,7 +195,9 @@ fn best_partners(x: &Clustered, y: &Clustered, lists: &[Vec<u32>], pot: &[f64], 
                     .collect();
                 let keep = k.min(scored.len());
                 if keep < scored.len() {
-                    scored.select_nth_unstable_by(keep, |a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+                    scored.select_nth_unstable_by(keep, |a, b| {
+                        a.0.total_cmp(&b.0).then(a.1.cmp(&b.1))
+                    });
                     scored.truncate(keep);
                 }
                 scored.into_iter().map(|(_, j, c)| (j, c)).collect()
@@ -164,7 +207,13 @@ fn best_partners(x: &Clustered, y: &Clustered, lists: &[Vec<u32>], pot: &[f64], 
 }
 
 /// Every pair with `c_ij − u_i − v_j < −tolerance`, and the number of pairs evaluated.
-fn violations(x: &Clustered, y: &Clustered, u: &[f64], v: &[f64], tolerance: f64) -> (Vec<(u32, u32, f64)>, u64) {
+fn violations(
+    x: &Clustered,
+    y: &Clustered,
+    u: &[f64],
+    v: &[f64],
+    tolerance: f64,
+) -> (Vec<(u32, u32, f64)>, u64) {
     let sup = Support::truncated(x, &fit_potentials(x, u), y, &fit_potentials(y, v), 0.0);
     let parts: Vec<(Vec<(u32, u32, f64)>, u64)> = x
         .clusters
@@ -175,13 +224,19 @@ fn violations(x: &Clustered, y: &Clustered, u: &[f64], v: &[f64], tolerance: f64
             let mut checked = 0u64;
             for i in ci.range.clone() {
                 let p = x.cloud.point(i);
-                for j in list.iter().flat_map(|&jb| y.clusters[jb as usize].range.clone()) {
+                for j in list
+                    .iter()
+                    .flat_map(|&jb| y.clusters[jb as usize].range.clone())
+                {
                     let c = sq_dist_f64(&p, &y.cloud.point(j));
                     if c - u[i] - v[j] < -tolerance {
                         found.push((i as u32, j as u32, c));
                     }
                 }
-                checked += list.iter().map(|&jb| y.clusters[jb as usize].range.len() as u64).sum::<u64>();
+                checked += list
+                    .iter()
+                    .map(|&jb| y.clusters[jb as usize].range.len() as u64)
+                    .sum::<u64>();
             }
             (found, checked)
         })

@@ -52,7 +52,11 @@ pub(crate) struct RowSum {
 
 impl RowSum {
     pub(crate) fn new() -> Self {
-        Self { max: f32::NEG_INFINITY, sum: 0.0, moments: [0.0; DIM + 1] }
+        Self {
+            max: f32::NEG_INFINITY,
+            sum: 0.0,
+            moments: [0.0; DIM + 1],
+        }
     }
 
     /// `log Σ_j exp(score_j)` over everything pushed so far.
@@ -62,7 +66,10 @@ impl RowSum {
 
     /// The weighted mean target `Σ w_j y_j / Σ w_j` and mean cost (valid after a `moments` pass).
     pub(crate) fn barycentre(&self) -> (Point, f64) {
-        (std::array::from_fn(|d| (self.moments[d] / self.sum) as f32), self.moments[DIM] / self.sum)
+        (
+            std::array::from_fn(|d| (self.moments[d] / self.sum) as f32),
+            self.moments[DIM] / self.sum,
+        )
     }
 
     fn rescale_to(&mut self, new_max: f32) {
@@ -168,7 +175,11 @@ fn lane_max(values: &[f32]) -> f32 {
     let mut lanes = [f32::NEG_INFINITY; LANES];
     for chunk in values.chunks_exact(LANES) {
         for l in 0..LANES {
-            lanes[l] = if chunk[l] > lanes[l] { chunk[l] } else { lanes[l] };
+            lanes[l] = if chunk[l] > lanes[l] {
+                chunk[l]
+            } else {
+                lanes[l]
+            };
         }
     }
     lanes.iter().copied().fold(f32::NEG_INFINITY, f32::max)
@@ -192,13 +203,22 @@ mod tests {
     #[test]
     fn streamed_row_matches_direct_log_sum_exp() {
         let n = 150;
-        let y: [Vec<f32>; DIM] = std::array::from_fn(|d| (0..n).map(|j| ((j * (d + 3)) % 17) as f32 / 17.0).collect());
+        let y: [Vec<f32>; DIM] =
+            std::array::from_fn(|d| (0..n).map(|j| ((j * (d + 3)) % 17) as f32 / 17.0).collect());
         let h: Vec<f32> = (0..n).map(|j| -(j as f32) * 0.01).collect();
         let g = vec![0.0f32; n];
         let x = [0.3, 0.1, 0.7, 0.2, 0.9];
         let inv_eps = 20.0;
         let mut acc = RowSum::new();
-        let pairs = stream_row::<true>(&x, &y, &h, &g, inv_eps, [0..40, 40..n].into_iter(), &mut acc);
+        let pairs = stream_row::<true>(
+            &x,
+            &y,
+            &h,
+            &g,
+            inv_eps,
+            [0..40, 40..n].into_iter(),
+            &mut acc,
+        );
         assert_eq!(pairs, n as u64);
         let scores: Vec<f64> = (0..n)
             .map(|j| {
@@ -209,7 +229,10 @@ mod tests {
         let m = scores.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         let s: f64 = scores.iter().map(|v| (v - m).exp()).sum();
         assert!((acc.log_sum() - (m + s.ln())).abs() < 1e-5);
-        let bary0: f64 = (0..n).map(|j| (scores[j] - m).exp() * f64::from(y[0][j])).sum::<f64>() / s;
+        let bary0: f64 = (0..n)
+            .map(|j| (scores[j] - m).exp() * f64::from(y[0][j]))
+            .sum::<f64>()
+            / s;
         assert!((f64::from(acc.barycentre().0[0]) - bary0).abs() < 1e-5);
     }
 }

@@ -35,7 +35,11 @@ impl PointCloud {
         }
         for (axis, column) in AXES.iter().zip(&columns) {
             if column.len() != expected {
-                return Err(OtError::RaggedColumns { axis, len: column.len(), expected });
+                return Err(OtError::RaggedColumns {
+                    axis,
+                    len: column.len(),
+                    expected,
+                });
             }
             if let Some((index, &value)) = column.iter().enumerate().find(|(_, v)| !v.is_finite()) {
                 return Err(OtError::NonFinite { index, axis, value });
@@ -47,7 +51,9 @@ impl PointCloud {
     /// Builds a cloud from columns known to be non-empty, of equal length and finite
     /// (e.g. centroids of a valid cloud).
     pub(crate) fn from_trusted_columns(columns: [Vec<f32>; DIM]) -> Self {
-        debug_assert!(!columns[0].is_empty() && columns.iter().all(|c| c.len() == columns[0].len()));
+        debug_assert!(
+            !columns[0].is_empty() && columns.iter().all(|c| c.len() == columns[0].len())
+        );
         debug_assert!(columns.iter().flatten().all(|v| v.is_finite()));
         Self { columns }
     }
@@ -61,7 +67,11 @@ impl PointCloud {
     /// Builds a cloud from colours and screen positions in `[0, 1]`, scaling positions by `lambda`.
     pub fn from_rgb_xy(rgb: &[[f32; 3]], xy: &[[f32; 2]], lambda: f32) -> Result<Self, OtError> {
         if rgb.len() != xy.len() {
-            return Err(OtError::RaggedColumns { axis: "x", len: xy.len(), expected: rgb.len() });
+            return Err(OtError::RaggedColumns {
+                axis: "x",
+                len: xy.len(),
+                expected: rgb.len(),
+            });
         }
         let points: Vec<Point> = rgb
             .iter()
@@ -98,14 +108,25 @@ impl PointCloud {
 
     /// The cloud with its points reordered: point `k` of the result is point `order[k]` of `self`.
     pub(crate) fn reordered(&self, order: &[u32]) -> Self {
-        let columns = std::array::from_fn(|d| order.iter().map(|&i| self.columns[d][i as usize]).collect());
+        let columns =
+            std::array::from_fn(|d| order.iter().map(|&i| self.columns[d][i as usize]).collect());
         Self { columns }
     }
 
     /// Per-coordinate minimum and maximum.
     pub fn bounds(&self) -> (Point, Point) {
-        let lo = std::array::from_fn(|d| self.columns[d].iter().copied().fold(f32::INFINITY, f32::min));
-        let hi = std::array::from_fn(|d| self.columns[d].iter().copied().fold(f32::NEG_INFINITY, f32::max));
+        let lo = std::array::from_fn(|d| {
+            self.columns[d]
+                .iter()
+                .copied()
+                .fold(f32::INFINITY, f32::min)
+        });
+        let hi = std::array::from_fn(|d| {
+            self.columns[d]
+                .iter()
+                .copied()
+                .fold(f32::NEG_INFINITY, f32::max)
+        });
         (lo, hi)
     }
 }
@@ -113,7 +134,10 @@ impl PointCloud {
 /// Checks that two clouds can be matched: equal sizes.
 pub(crate) fn check_pair(source: &PointCloud, target: &PointCloud) -> Result<usize, OtError> {
     if source.len() != target.len() {
-        return Err(OtError::SizeMismatch { source_len: source.len(), target_len: target.len() });
+        return Err(OtError::SizeMismatch {
+            source_len: source.len(),
+            target_len: target.len(),
+        });
     }
     Ok(source.len())
 }

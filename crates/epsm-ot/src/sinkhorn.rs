@@ -89,12 +89,19 @@ impl SinkhornSettings {
 
     /// The debiased Sinkhorn divergence (zero for identical clouds), three times the work.
     pub fn debiased() -> Self {
-        Self { debias: true, ..Self::default() }
+        Self {
+            debias: true,
+            ..Self::default()
+        }
     }
 
     /// Faster and blurrier: blur 0.03, scaling 0.7.
     pub fn fast() -> Self {
-        Self { blur: 0.03, scaling: 0.7, ..Self::default() }
+        Self {
+            blur: 0.03,
+            scaling: 0.7,
+            ..Self::default()
+        }
     }
 
     /// Checks every setting against its documented range.
@@ -107,13 +114,25 @@ impl SinkhornSettings {
             return bad("sinkhorn.scaling", self.scaling, "must be in (0, 1)");
         }
         if !(self.truncation >= 10.0) {
-            return bad("sinkhorn.truncation", self.truncation, "must be at least 10");
+            return bad(
+                "sinkhorn.truncation",
+                self.truncation,
+                "must be at least 10",
+            );
         }
         if !(self.marginal_tolerance > 0.0) {
-            return bad("sinkhorn.marginal_tolerance", self.marginal_tolerance, "must be positive");
+            return bad(
+                "sinkhorn.marginal_tolerance",
+                self.marginal_tolerance,
+                "must be positive",
+            );
         }
         if !(1.0..2.0).contains(&self.overrelaxation) {
-            return bad("sinkhorn.overrelaxation", self.overrelaxation, "must be in [1, 2)");
+            return bad(
+                "sinkhorn.overrelaxation",
+                self.overrelaxation,
+                "must be in [1, 2)",
+            );
         }
         if self.cluster_size == 0 {
             return bad("sinkhorn.cluster_size", 0.0, "must be at least 1");
@@ -142,11 +161,21 @@ fn solve_one(x: &Clustered, y: &Clustered, diam2: f64, settings: &SinkhornSettin
     let value = mean(&dual.f) + mean(&dual.g);
     let transport_cost = costs.iter().sum::<f64>() / n;
     let pairs = dual.pairs + bary_pairs;
-    Solved { dual, barycentres, value, transport_cost, pairs }
+    Solved {
+        dual,
+        barycentres,
+        value,
+        transport_cost,
+        pairs,
+    }
 }
 
 /// Solves the entropic problem from `source` to `target`.
-pub fn solve(source: &PointCloud, target: &PointCloud, settings: &SinkhornSettings) -> Result<OtResult, OtError> {
+pub fn solve(
+    source: &PointCloud,
+    target: &PointCloud,
+    settings: &SinkhornSettings,
+) -> Result<OtResult, OtError> {
     settings.validate()?;
     check_pair(source, target)?;
     let x = Clustered::new(source, settings.cluster_size);
@@ -183,5 +212,10 @@ pub fn solve(source: &PointCloud, target: &PointCloud, settings: &SinkhornSettin
         transport_cost: xy.transport_cost,
         marginal_error: xy.dual.marginal_error,
     };
-    Ok(OtResult { loss, gradient: displacement_gradient(source, &pull), matching: Matching::Entropic(plan), stats })
+    Ok(OtResult {
+        loss,
+        gradient: displacement_gradient(source, &pull),
+        matching: Matching::Entropic(plan),
+        stats,
+    })
 }

@@ -32,7 +32,10 @@ pub struct SlicedSettings {
 
 impl Default for SlicedSettings {
     fn default() -> Self {
-        Self { projections: 64, seed: 0 }
+        Self {
+            projections: 64,
+            seed: 0,
+        }
     }
 }
 
@@ -47,20 +50,37 @@ fn direction(rng: &mut Rng) -> [f32; DIM] {
 }
 
 fn sorted_projection(cloud: &PointCloud, theta: &[f32; DIM]) -> (Vec<f32>, Vec<u32>) {
-    let proj: Vec<f32> = cloud.points().map(|p| (0..DIM).map(|d| p[d] * theta[d]).sum()).collect();
+    let proj: Vec<f32> = cloud
+        .points()
+        .map(|p| (0..DIM).map(|d| p[d] * theta[d]).sum())
+        .collect();
     let mut order: Vec<u32> = (0..cloud.len() as u32).collect();
-    order.sort_unstable_by(|&a, &b| proj[a as usize].total_cmp(&proj[b as usize]).then(a.cmp(&b)));
+    order.sort_unstable_by(|&a, &b| {
+        proj[a as usize]
+            .total_cmp(&proj[b as usize])
+            .then(a.cmp(&b))
+    });
     (proj, order)
 }
 
 /// Solves the sliced problem from `source` to `target`.
-pub fn solve(source: &PointCloud, target: &PointCloud, settings: &SlicedSettings) -> Result<OtResult, OtError> {
+pub fn solve(
+    source: &PointCloud,
+    target: &PointCloud,
+    settings: &SlicedSettings,
+) -> Result<OtResult, OtError> {
     let n = check_pair(source, target)?;
     if settings.projections == 0 {
-        return Err(OtError::InvalidSetting { key: "sliced.projections", value: 0.0, reason: "must be at least 1" });
+        return Err(OtError::InvalidSetting {
+            key: "sliced.projections",
+            value: 0.0,
+            reason: "must be at least 1",
+        });
     }
     let mut rng = Rng::new(settings.seed);
-    let thetas: Vec<[f32; DIM]> = (0..settings.projections).map(|_| direction(&mut rng)).collect();
+    let thetas: Vec<[f32; DIM]> = (0..settings.projections)
+        .map(|_| direction(&mut rng))
+        .collect();
     // Per direction: each point's projected displacement d_i(θ).
     let per_dir: Vec<Vec<f32>> = thetas
         .par_iter()
@@ -75,21 +95,38 @@ pub fn solve(source: &PointCloud, target: &PointCloud, settings: &SlicedSettings
         })
         .collect();
     let k = settings.projections as f64;
-    let loss = 5.0 / k * per_dir.iter().map(|d| d.iter().map(|&t| f64::from(t) * f64::from(t)).sum::<f64>()).sum::<f64>()
+    let loss = 5.0 / k
+        * per_dir
+            .iter()
+            .map(|d| d.iter().map(|&t| f64::from(t) * f64::from(t)).sum::<f64>())
+            .sum::<f64>()
         / n as f64;
     let scale = (5.0 / k) as f32;
     let targets: Vec<Point> = source
         .points()
         .enumerate()
         .map(|(i, p)| {
-            std::array::from_fn(|c| p[c] - scale * thetas.iter().zip(&per_dir).map(|(t, d)| d[i] * t[c]).sum::<f32>())
+            std::array::from_fn(|c| {
+                p[c] - scale
+                    * thetas
+                        .iter()
+                        .zip(&per_dir)
+                        .map(|(t, d)| d[i] * t[c])
+                        .sum::<f32>()
+            })
         })
         .collect();
-    let stats = SolveStats { iterations: settings.projections, ..SolveStats::default() };
+    let stats = SolveStats {
+        iterations: settings.projections,
+        ..SolveStats::default()
+    };
     Ok(OtResult {
         loss,
         gradient: displacement_gradient(source, &targets),
-        matching: Matching::Sliced(SlicedPlan { projections: settings.projections, targets }),
+        matching: Matching::Sliced(SlicedPlan {
+            projections: settings.projections,
+            targets,
+        }),
         stats,
     })
 }

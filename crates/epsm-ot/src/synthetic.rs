@@ -47,7 +47,9 @@ impl Rng {
 /// `n` points uniform in `[0, 1]⁵`. Returns `None` for `n = 0`.
 pub fn uniform_cloud(n: usize, seed: u64) -> Option<PointCloud> {
     let mut rng = Rng::new(seed);
-    let points: Vec<Point> = (0..n).map(|_| std::array::from_fn(|_| rng.uniform())).collect();
+    let points: Vec<Point> = (0..n)
+        .map(|_| std::array::from_fn(|_| rng.uniform()))
+        .collect();
     PointCloud::from_points(&points).ok()
 }
 
@@ -61,11 +63,16 @@ struct Disc {
 fn render(discs: &[Disc], n: usize, side: usize, rng: &mut Rng) -> Option<PointCloud> {
     let points: Vec<Point> = (0..n)
         .map(|k| {
-            let (x, y) = (((k % side) as f32 + 0.5) / side as f32, ((k / side) as f32 + 0.5) / side as f32);
+            let (x, y) = (
+                ((k % side) as f32 + 0.5) / side as f32,
+                ((k / side) as f32 + 0.5) / side as f32,
+            );
             let mut colour = [0.0f32; 3].map(|_| 0.04 + 0.04 * rng.uniform());
             for d in discs {
                 if (x - d.centre[0]).powi(2) + (y - d.centre[1]).powi(2) <= d.radius * d.radius {
-                    colour = d.colour.map(|c| (c + 0.02 * (rng.uniform() - 0.5)).clamp(0.0, 1.0));
+                    colour = d
+                        .colour
+                        .map(|c| (c + 0.02 * (rng.uniform() - 0.5)).clamp(0.0, 1.0));
                 }
             }
             [colour[0], colour[1], colour[2], x, y]
@@ -85,7 +92,11 @@ pub fn blobs_pair(n: usize, seed: u64) -> Option<(PointCloud, PointCloud)> {
         .map(|_| Disc {
             centre: [rng.range(0.2, 0.8), rng.range(0.2, 0.8)],
             radius: rng.range(0.06, 0.16),
-            colour: [rng.range(0.2, 1.0), rng.range(0.2, 1.0), rng.range(0.2, 1.0)],
+            colour: [
+                rng.range(0.2, 1.0),
+                rng.range(0.2, 1.0),
+                rng.range(0.2, 1.0),
+            ],
         })
         .collect();
     let b: Vec<Disc> = a
@@ -99,5 +110,8 @@ pub fn blobs_pair(n: usize, seed: u64) -> Option<(PointCloud, PointCloud)> {
             colour: d.colour.map(|c| (c + rng.range(-0.2, 0.2)).clamp(0.0, 1.0)),
         })
         .collect();
-    Some((render(&a, n, side, &mut rng)?, render(&b, n, side, &mut rng)?))
+    Some((
+        render(&a, n, side, &mut rng)?,
+        render(&b, n, side, &mut rng)?,
+    ))
 }

@@ -59,7 +59,10 @@ pub fn run(args: &ManifoldBenchArgs) -> anyhow::Result<()> {
             .map(|i| {
                 let k = u64::from(i).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 16;
                 PixelSample {
-                    pixel: UVec2::new((k % u64::from(w)) as u32, ((k / u64::from(w)) % u64::from(h)) as u32),
+                    pixel: UVec2::new(
+                        (k % u64::from(w)) as u32,
+                        ((k / u64::from(w)) % u64::from(h)) as u32,
+                    ),
                     sample: i % opts.spp.max(1),
                 }
             })
@@ -69,13 +72,17 @@ pub fn run(args: &ManifoldBenchArgs) -> anyhow::Result<()> {
         let mut groups = Groups::new();
         for record in &records {
             for p in classify(record, &scene, &motion).paths {
-                groups.entry((p.kind, p.nodes.len() - 1)).or_default().push(p);
+                groups
+                    .entry((p.kind, p.nodes.len() - 1))
+                    .or_default()
+                    .push(p);
             }
         }
         let settings = SolveSettings::for_radius(scene.radius());
         for ((kind, len), paths) in &groups {
-            let (rate, dropped) =
-                super::with_threads(args.threads, || measure(paths, &motion, &settings, args.seconds))?;
+            let (rate, dropped) = super::with_threads(args.threads, || {
+                measure(paths, &motion, &settings, args.seconds)
+            })?;
             let row = serde_json::json!({
                 "scene": path.display().to_string(),
                 "type": kind.name(),
@@ -105,13 +112,24 @@ pub fn run(args: &ManifoldBenchArgs) -> anyhow::Result<()> {
 
 /// Solves `paths` repeatedly for at least `seconds`; returns (solves per
 /// second, fraction dropped).
-fn measure(paths: &[DiffPath], motion: &Motion, settings: &SolveSettings, seconds: f64) -> (f64, f64) {
+fn measure(
+    paths: &[DiffPath],
+    motion: &Motion,
+    settings: &SolveSettings,
+    seconds: f64,
+) -> (f64, f64) {
     let g = DVec2::new(1.0, 0.5);
     let start = Instant::now();
     let (mut solves, mut dropped) = (0usize, 0usize);
     while solves == 0 || start.elapsed().as_secs_f64() < seconds {
-        dropped += paths.par_iter().filter(|p| solve_adjoint(p, g, motion, settings).is_err()).count();
+        dropped += paths
+            .par_iter()
+            .filter(|p| solve_adjoint(p, g, motion, settings).is_err())
+            .count();
         solves += paths.len();
     }
-    (solves as f64 / start.elapsed().as_secs_f64(), dropped as f64 / solves.max(1) as f64)
+    (
+        solves as f64 / start.elapsed().as_secs_f64(),
+        dropped as f64 / solves.max(1) as f64,
+    )
 }

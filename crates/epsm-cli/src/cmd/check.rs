@@ -54,7 +54,9 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
         table.add_default_geometry()?;
     }
     for key in &args.params {
-        table.add(key).with_context(|| format!("{}: --param", args.scene.display()))?;
+        table
+            .add(key)
+            .with_context(|| format!("{}: --param", args.scene.display()))?;
     }
     let opts = RenderOptions::from_scene(&scene);
     let cam = scene.camera();
@@ -98,7 +100,10 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
 }
 
 fn drops_json(d: &DropCounts) -> serde_json::Value {
-    d.nonzero().map(|(r, c)| (r.name().to_owned(), serde_json::json!(c))).collect::<serde_json::Map<_, _>>().into()
+    d.nonzero()
+        .map(|(r, c)| (r.name().to_owned(), serde_json::json!(c)))
+        .collect::<serde_json::Map<_, _>>()
+        .into()
 }
 
 fn to_json(report: &CheckReport) -> serde_json::Value {
@@ -120,14 +125,23 @@ fn to_json(report: &CheckReport) -> serde_json::Value {
         .into()
 }
 
-fn print_text(scene: &std::path::Path, table: &ParamTable, report: &CheckReport, skipped: &DropCounts) {
+fn print_text(
+    scene: &std::path::Path,
+    table: &ParamTable,
+    report: &CheckReport,
+    skipped: &DropCounts,
+) {
     println!("{}: {} parameters", scene.display(), table.len());
     println!(
         "{:<18} {:>8} {:>14} {:>14} {:>6}  dropped",
         "path type", "checked", "median rel err", "max rel err", "ill"
     );
     for (kind, r) in &report.kinds {
-        let drops: Vec<String> = r.dropped.nonzero().map(|(d, c)| format!("{}={c}", d.name())).collect();
+        let drops: Vec<String> = r
+            .dropped
+            .nonzero()
+            .map(|(d, c)| format!("{}={c}", d.name()))
+            .collect();
         println!(
             "{:<18} {:>8} {:>14.2e} {:>14.2e} {:>6}  {}",
             kind.name(),
@@ -135,11 +149,18 @@ fn print_text(scene: &std::path::Path, table: &ParamTable, report: &CheckReport,
             r.median_rel_err(),
             r.max_rel_err(),
             r.ill_conditioned,
-            if drops.is_empty() { "-".to_owned() } else { drops.join(" ") }
+            if drops.is_empty() {
+                "-".to_owned()
+            } else {
+                drops.join(" ")
+            }
         );
     }
     if skipped.total() > 0 {
-        let s: Vec<String> = skipped.nonzero().map(|(d, c)| format!("{}={c}", d.name())).collect();
+        let s: Vec<String> = skipped
+            .nonzero()
+            .map(|(d, c)| format!("{}={c}", d.name()))
+            .collect();
         println!("not classified: {}", s.join(" "));
     }
 }

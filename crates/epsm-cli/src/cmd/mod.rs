@@ -5,6 +5,8 @@ pub mod bench_manifold;
 pub mod bench_rays;
 pub mod bench_render;
 pub mod check;
+pub mod optimize;
+pub mod plots;
 pub mod render;
 
 /// Runs `f` on a rayon pool of `threads` threads (all cores when `None`).

@@ -76,19 +76,39 @@ pub fn solve_matrix(cost: &[f64], n: usize) -> Assignment {
     for j in 1..=n {
         perm[row_of[j] - 1] = j - 1;
     }
-    Assignment { perm, u: u[1..].to_vec(), v: v[1..].to_vec() }
+    Assignment {
+        perm,
+        u: u[1..].to_vec(),
+        v: v[1..].to_vec(),
+    }
 }
 
 /// Exact matching through the dense matrix (reference; O(n²) memory, O(n³) time).
 pub fn solve(source: &PointCloud, target: &PointCloud) -> Result<OtResult, OtError> {
     let n = check_pair(source, target)?;
-    let cost: Vec<f64> = source.points().flat_map(|p| target.points().map(move |q| sq_dist_f64(&p, &q))).collect();
+    let cost: Vec<f64> = source
+        .points()
+        .flat_map(|p| target.points().map(move |q| sq_dist_f64(&p, &q)))
+        .collect();
     let assignment = solve_matrix(&cost, n);
-    Ok(permutation_result(source, target, assignment.perm, SolveStats { pair_evaluations: (n * n) as u64, ..SolveStats::default() }))
+    Ok(permutation_result(
+        source,
+        target,
+        assignment.perm,
+        SolveStats {
+            pair_evaluations: (n * n) as u64,
+            ..SolveStats::default()
+        },
+    ))
 }
 
 /// Builds the result of an exact matching: loss, gradient `2(P_i − Q_σ(i))/n`, permutation.
-pub(crate) fn permutation_result(source: &PointCloud, target: &PointCloud, perm: Vec<usize>, stats: SolveStats) -> OtResult {
+pub(crate) fn permutation_result(
+    source: &PointCloud,
+    target: &PointCloud,
+    perm: Vec<usize>,
+    stats: SolveStats,
+) -> OtResult {
     let targets: Vec<_> = perm.iter().map(|&j| target.point(j)).collect();
     OtResult {
         loss: assignment_cost(source, target, &perm),

@@ -25,7 +25,10 @@ impl Eq for Entry {}
 
 impl Ord for Entry {
     fn cmp(&self, other: &Self) -> Ordering {
-        other.dist.total_cmp(&self.dist).then(other.col.cmp(&self.col))
+        other
+            .dist
+            .total_cmp(&self.dist)
+            .then(other.col.cmp(&self.col))
     }
 }
 
@@ -64,7 +67,10 @@ impl SparseAssignment {
             edges,
         };
         for i in 0..n {
-            let best = s.edges[i].iter().map(|&(j, c)| (c - s.v[j as usize], j)).min_by(|a, b| a.0.total_cmp(&b.0));
+            let best = s.edges[i]
+                .iter()
+                .map(|&(j, c)| (c - s.v[j as usize], j))
+                .min_by(|a, b| a.0.total_cmp(&b.0));
             if let Some((red, j)) = best {
                 s.u[i] = red;
                 if s.row_of[j as usize] == NONE {
@@ -100,7 +106,9 @@ impl SparseAssignment {
 
     /// Rows without a column.
     pub fn free_rows(&self) -> Vec<usize> {
-        (0..self.col_of.len()).filter(|&i| self.col_of[i] == NONE).collect()
+        (0..self.col_of.len())
+            .filter(|&i| self.col_of[i] == NONE)
+            .collect()
     }
 
     /// The matching as a permutation (every row must be matched).

@@ -32,15 +32,24 @@ struct Level<'a> {
 impl<'a> Level<'a> {
     fn fine(c: &'a Clustered) -> Self {
         let n = c.cloud.len();
-        Self { cloud: &c.cloud, ranges: c.ranges(), log_w: vec![-(n as f32).ln(); n] }
+        Self {
+            cloud: &c.cloud,
+            ranges: c.ranges(),
+            log_w: vec![-(n as f32).ln(); n],
+        }
     }
 }
 
 /// The centroid cloud of a clustering and its log-weights.
 fn coarse_cloud(c: &Clustered) -> (PointCloud, Vec<f32>) {
     let n = c.cloud.len() as f32;
-    let columns = std::array::from_fn(|d| c.clusters.iter().map(|k| k.centroid[d] as f32).collect());
-    let log_w = c.clusters.iter().map(|k| (k.range.len() as f32 / n).ln()).collect();
+    let columns =
+        std::array::from_fn(|d| c.clusters.iter().map(|k| k.centroid[d] as f32).collect());
+    let log_w = c
+        .clusters
+        .iter()
+        .map(|k| (k.range.len() as f32 / n).ln())
+        .collect();
     (PointCloud::from_trusted_columns(columns), log_w)
 }
 
@@ -95,7 +104,15 @@ fn softmin(x: &Level, y: &Level, lists: &[Vec<u32>], g: &[f64], eps: f64) -> (Ve
                 .map(|i| {
                     let mut acc = RowSum::new();
                     let blocks = targets.iter().cloned();
-                    pairs += stream_row::<false>(&x.cloud.point(i), cols, &y.log_w, &g32, inv_eps, blocks, &mut acc);
+                    pairs += stream_row::<false>(
+                        &x.cloud.point(i),
+                        cols,
+                        &y.log_w,
+                        &g32,
+                        inv_eps,
+                        blocks,
+                        &mut acc,
+                    );
                     -kappa - eps * acc.log_sum()
                 })
                 .collect();
@@ -131,11 +148,25 @@ struct Loop<'a> {
 impl Loop<'_> {
     fn support(&self, f: &[f64], g: &[f64], eps: f64) -> Support {
         let (fit_f, fit_g) = (fit_potentials(self.x, f), fit_potentials(self.y, g));
-        Support::truncated(self.x, &fit_f, self.y, &fit_g, self.settings.truncation * eps)
+        Support::truncated(
+            self.x,
+            &fit_f,
+            self.y,
+            &fit_g,
+            self.settings.truncation * eps,
+        )
     }
 
     /// One Sinkhorn update: `f ← softmin(g)`, then `g ← softmin(f)`.
-    fn step(&mut self, xl: &Level, yl: &Level, sup: &Support, f: &mut Vec<f64>, g: &mut Vec<f64>, eps: f64) {
+    fn step(
+        &mut self,
+        xl: &Level,
+        yl: &Level,
+        sup: &Support,
+        f: &mut Vec<f64>,
+        g: &mut Vec<f64>,
+        eps: f64,
+    ) {
         let (ft, p1) = softmin(xl, yl, &sup.rows, g, eps);
         *f = ft;
         let (gt, p2) = softmin(yl, xl, &sup.cols, f, eps);
@@ -146,17 +177,42 @@ impl Loop<'_> {
 }
 
 /// Runs the whole ε-scaling loop for the source `x` and target `y`.
-pub(crate) fn solve_dual(x: &Clustered, y: &Clustered, diameter_sq: f64, settings: &SinkhornSettings) -> Dual {
+pub(crate) fn solve_dual(
+    x: &Clustered,
+    y: &Clustered,
+    diameter_sq: f64,
+    settings: &SinkhornSettings,
+) -> Dual {
     let eps_list = schedule(diameter_sq, settings.blur, settings.scaling);
-    let mut lp = Loop { x, y, settings, pairs: 0, iterations: 0 };
+    let mut lp = Loop {
+        x,
+        y,
+        settings,
+        pairs: 0,
+        iterations: 0,
+    };
 
     // Coarse phase: dense Sinkhorn on cluster centroids.
     let (cx_cloud, cx_w) = coarse_cloud(x);
     let (cy_cloud, cy_w) = coarse_cloud(y);
-    let cx = Level { cloud: &cx_cloud, ranges: vec![0..cx_w.len()], log_w: cx_w };
-    let cy = Level { cloud: &cy_cloud, ranges: vec![0..cy_w.len()], log_w: cy_w };
+    let cx = Level {
+        cloud: &cx_cloud,
+        ranges: vec![0..cx_w.len()],
+        log_w: cx_w,
+    };
+    let cy = Level {
+        cloud: &cy_cloud,
+        ranges: vec![0..cy_w.len()],
+        log_w: cy_w,
+    };
     let whole = Support::dense(1, 1);
-    let radius = |c: &Clustered| c.clusters.iter().map(|k| k.radius * k.range.len() as f64).sum::<f64>() / c.cloud.len() as f64;
+    let radius = |c: &Clustered| {
+        c.clusters
+            .iter()
+            .map(|k| k.radius * k.range.len() as f64)
+            .sum::<f64>()
+            / c.cloud.len() as f64
+    };
     let jump_eps = (settings.jump_radii * radius(x).max(radius(y))).powi(2);
     let (mut fc, mut gc) = (vec![0.0; cx.log_w.len()], vec![0.0; cy.log_w.len()]);
     let mut k = 0;
@@ -210,7 +266,15 @@ pub(crate) fn solve_dual(x: &Clustered, y: &Clustered, diameter_sq: f64, setting
     let (gt, pairs) = softmin(&fy, &fx, &support.cols, &f, eps);
     lp.pairs += pairs;
     g = gt;
-    Dual { f, g, eps, support, iterations: lp.iterations, pairs: lp.pairs, marginal_error }
+    Dual {
+        f,
+        g,
+        eps,
+        support,
+        iterations: lp.iterations,
+        pairs: lp.pairs,
+        marginal_error,
+    }
 }
 
 /// Polish iterations between two refreshes of the truncated support.
@@ -218,7 +282,9 @@ const SUPPORT_REFRESH: usize = 8;
 
 /// Over-relaxed update `p ← (1 − ω) p + ω p̃` (Thibault et al. 2017; ω = 1 is plain Sinkhorn).
 fn relax(p: &mut [f64], target: &[f64], omega: f64) {
-    p.iter_mut().zip(target).for_each(|(a, &b)| *a += omega * (b - *a));
+    p.iter_mut()
+        .zip(target)
+        .for_each(|(a, &b)| *a += omega * (b - *a));
 }
 
 /// `Σ_i a_i |exp((f_i − f̃_i)/ε) − 1|` with uniform `a_i`, summed in fixed chunks for determinism.
@@ -227,13 +293,22 @@ fn row_marginal_error(f: &[f64], ft: &[f64], eps: f64) -> f64 {
     let parts: Vec<f64> = f
         .par_chunks(4096)
         .zip(ft.par_chunks(4096))
-        .map(|(a, b)| a.iter().zip(b).map(|(&fa, &fb)| ((fa - fb) / eps).exp_m1().abs()).sum::<f64>())
+        .map(|(a, b)| {
+            a.iter()
+                .zip(b)
+                .map(|(&fa, &fb)| ((fa - fb) / eps).exp_m1().abs())
+                .sum::<f64>()
+        })
         .collect();
     parts.iter().sum::<f64>() / n
 }
 
 /// Per-source-point barycentre `Σ_j π_ij y_j / Σ_j π_ij` and mean cost, in the clustered order.
-pub(crate) fn barycentres(x: &Clustered, y: &Clustered, dual: &Dual) -> (Vec<[f32; 5]>, Vec<f64>, u64) {
+pub(crate) fn barycentres(
+    x: &Clustered,
+    y: &Clustered,
+    dual: &Dual,
+) -> (Vec<[f32; 5]>, Vec<f64>, u64) {
     let (fx, fy) = (Level::fine(x), Level::fine(y));
     let (g32, _) = centred(&dual.g);
     let inv_eps = (1.0 / dual.eps) as f32;
@@ -250,7 +325,15 @@ pub(crate) fn barycentres(x: &Clustered, y: &Clustered, dual: &Dual) -> (Vec<[f3
                 .map(|i| {
                     let mut acc = RowSum::new();
                     let blocks = targets.iter().cloned();
-                    pairs += stream_row::<true>(&x.cloud.point(i), cols, &fy.log_w, &g32, inv_eps, blocks, &mut acc);
+                    pairs += stream_row::<true>(
+                        &x.cloud.point(i),
+                        cols,
+                        &fy.log_w,
+                        &g32,
+                        inv_eps,
+                        blocks,
+                        &mut acc,
+                    );
                     acc.barycentre()
                 })
                 .collect();

@@ -23,18 +23,63 @@ fn all_finite(r: &crate::OtResult) -> bool {
 fn bad_input_is_a_typed_error() {
     assert_eq!(PointCloud::from_points(&[]), Err(OtError::Empty));
     let nan = PointCloud::from_points(&[[0.0, f32::NAN, 0.0, 0.0, 0.0]]);
-    assert!(matches!(nan, Err(OtError::NonFinite { index: 0, axis: "g", .. })));
+    assert!(matches!(
+        nan,
+        Err(OtError::NonFinite {
+            index: 0,
+            axis: "g",
+            ..
+        })
+    ));
     let inf = PointCloud::from_points(&[[0.0; 5], [0.0, 0.0, 0.0, f32::INFINITY, 0.0]]);
-    assert!(matches!(inf, Err(OtError::NonFinite { index: 1, axis: "x", .. })));
-    let ragged = PointCloud::from_columns([vec![0.0; 3], vec![0.0; 3], vec![0.0; 2], vec![0.0; 3], vec![0.0; 3]]);
-    assert!(matches!(ragged, Err(OtError::RaggedColumns { axis: "b", len: 2, expected: 3 })));
+    assert!(matches!(
+        inf,
+        Err(OtError::NonFinite {
+            index: 1,
+            axis: "x",
+            ..
+        })
+    ));
+    let ragged = PointCloud::from_columns([
+        vec![0.0; 3],
+        vec![0.0; 3],
+        vec![0.0; 2],
+        vec![0.0; 3],
+        vec![0.0; 3],
+    ]);
+    assert!(matches!(
+        ragged,
+        Err(OtError::RaggedColumns {
+            axis: "b",
+            len: 2,
+            expected: 3
+        })
+    ));
     let mut rng = Rng::new(1);
-    let (a, b) = (random_cloud(&mut rng, 5, 1.0), random_cloud(&mut rng, 6, 1.0));
+    let (a, b) = (
+        random_cloud(&mut rng, 5, 1.0),
+        random_cloud(&mut rng, 6, 1.0),
+    );
     for m in matchers() {
-        assert_eq!(m.solve(&a, &b), Err(OtError::SizeMismatch { source_len: 5, target_len: 6 }));
+        assert_eq!(
+            m.solve(&a, &b),
+            Err(OtError::SizeMismatch {
+                source_len: 5,
+                target_len: 6
+            })
+        );
     }
-    let bad = Matcher::Sinkhorn(SinkhornSettings { blur: -1.0, ..SinkhornSettings::default() });
-    assert!(matches!(bad.solve(&a, &a), Err(OtError::InvalidSetting { key: "sinkhorn.blur", .. })));
+    let bad = Matcher::Sinkhorn(SinkhornSettings {
+        blur: -1.0,
+        ..SinkhornSettings::default()
+    });
+    assert!(matches!(
+        bad.solve(&a, &a),
+        Err(OtError::InvalidSetting {
+            key: "sinkhorn.blur",
+            ..
+        })
+    ));
 }
 
 #[test]
@@ -46,11 +91,25 @@ fn single_point_clouds() {
         assert!(all_finite(&r), "{}", m.name());
         if matches!(m, Matcher::Sliced(_)) {
             // Approximate: only the dominant directions are reliable.
-            assert!(r.gradient[0][0] < 0.0 && r.gradient[0][4] > 0.0, "sliced: {:?}", r.gradient);
+            assert!(
+                r.gradient[0][0] < 0.0 && r.gradient[0][4] > 0.0,
+                "sliced: {:?}",
+                r.gradient
+            );
             continue;
         }
-        assert!((r.gradient[0][0] - 2.0 * (0.1 - 0.5)).abs() < 1e-4, "{}: {:?}", m.name(), r.gradient);
-        assert!((r.gradient[0][4] - 2.0 * 0.5).abs() < 1e-4, "{}: {:?}", m.name(), r.gradient);
+        assert!(
+            (r.gradient[0][0] - 2.0 * (0.1 - 0.5)).abs() < 1e-4,
+            "{}: {:?}",
+            m.name(),
+            r.gradient
+        );
+        assert!(
+            (r.gradient[0][4] - 2.0 * 0.5).abs() < 1e-4,
+            "{}: {:?}",
+            m.name(),
+            r.gradient
+        );
     }
 }
 
@@ -58,12 +117,22 @@ fn single_point_clouds() {
 fn identical_clouds_give_zero_loss_and_gradient() {
     let mut rng = Rng::new(2);
     let a = random_cloud(&mut rng, 300, 1.0);
-    for m in [Matcher::exact(), Matcher::Exact(ExactSettings::sparse_only()), Matcher::Sinkhorn(SinkhornSettings::debiased())] {
+    for m in [
+        Matcher::exact(),
+        Matcher::Exact(ExactSettings::sparse_only()),
+        Matcher::Sinkhorn(SinkhornSettings::debiased()),
+    ] {
         let r = m.solve(&a, &a).unwrap_or_else(|e| panic!("{e}"));
         assert!(r.loss.abs() <= 1e-12, "{}: loss {}", m.name(), r.loss);
-        assert!(r.gradient.iter().flatten().all(|&g| g == 0.0), "{}", m.name());
+        assert!(
+            r.gradient.iter().flatten().all(|&g| g == 0.0),
+            "{}",
+            m.name()
+        );
     }
-    let r = Matcher::sinkhorn().solve(&a, &a).unwrap_or_else(|e| panic!("{e}"));
+    let r = Matcher::sinkhorn()
+        .solve(&a, &a)
+        .unwrap_or_else(|e| panic!("{e}"));
     assert!(all_finite(&r) && r.gradient.iter().flatten().all(|g| g.abs() < 1e-5));
 }
 
@@ -73,7 +142,10 @@ fn duplicate_points_far_apart_clouds_and_tiny_epsilon() {
     let mut rng = Rng::new(3);
     let other = random_cloud(&mut rng, 100, 1.0);
     let far = translated(&other, [0.0, 0.0, 0.0, 1000.0, -1000.0]);
-    let tiny = Matcher::Sinkhorn(SinkhornSettings { blur: 1e-3, ..SinkhornSettings::default() });
+    let tiny = Matcher::Sinkhorn(SinkhornSettings {
+        blur: 1e-3,
+        ..SinkhornSettings::default()
+    });
     for m in matchers().into_iter().chain([tiny]) {
         for (s, t) in [(&dup, &other), (&other, &dup), (&other, &far), (&dup, &dup)] {
             let r = m.solve(s, t).unwrap_or_else(|e| panic!("{e}"));
@@ -81,7 +153,15 @@ fn duplicate_points_far_apart_clouds_and_tiny_epsilon() {
         }
         let r = m.solve(&other, &far).unwrap_or_else(|e| panic!("{e}"));
         let mean_x = r.gradient.iter().map(|g| g[3]).sum::<f32>() / 100.0;
-        let tolerance = if matches!(m, Matcher::Sliced(_)) { 5.0 } else { 0.5 };
-        assert!((mean_x + 2000.0 / 100.0).abs() < tolerance, "{}: far-apart mean x gradient {mean_x}", m.name());
+        let tolerance = if matches!(m, Matcher::Sliced(_)) {
+            5.0
+        } else {
+            0.5
+        };
+        assert!(
+            (mean_x + 2000.0 / 100.0).abs() < tolerance,
+            "{}: far-apart mean x gradient {mean_x}",
+            m.name()
+        );
     }
 }

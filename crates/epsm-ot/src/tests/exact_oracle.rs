@@ -28,7 +28,10 @@ fn brute_force(source: &PointCloud, target: &PointCloud) -> f64 {
             }
         }
     }
-    let cost: Vec<Vec<f64>> = source.points().map(|p| target.points().map(|q| sq_dist_f64(&p, &q)).collect()).collect();
+    let cost: Vec<Vec<f64>> = source
+        .points()
+        .map(|p| target.points().map(|q| sq_dist_f64(&p, &q)).collect())
+        .collect();
     let mut best = f64::INFINITY;
     rec(0, &mut vec![false; cost.len()], 0.0, &cost, &mut best);
     best / source.len() as f64
@@ -36,9 +39,16 @@ fn brute_force(source: &PointCloud, target: &PointCloud) -> f64 {
 
 fn lsap_cost(source: &PointCloud, target: &PointCloud) -> f64 {
     let n = source.len();
-    let cost: Vec<f64> = source.points().flat_map(|p| target.points().map(move |q| sq_dist_f64(&p, &q))).collect();
+    let cost: Vec<f64> = source
+        .points()
+        .flat_map(|p| target.points().map(move |q| sq_dist_f64(&p, &q)))
+        .collect();
     let (rows, cols) = lsap::solve(n, n, &cost, false).unwrap_or_else(|e| panic!("lsap: {e:?}"));
-    rows.iter().zip(&cols).map(|(&i, &j)| cost[i * n + j]).sum::<f64>() / n as f64
+    rows.iter()
+        .zip(&cols)
+        .map(|(&i, &j)| cost[i * n + j])
+        .sum::<f64>()
+        / n as f64
 }
 
 fn assert_valid_permutation(perm: &[usize]) {
@@ -54,13 +64,20 @@ fn exact_matches_brute_force_for_tiny_clouds() {
     let mut rng = Rng::new(7);
     for case in 0..300 {
         let n = 1 + case % 8;
-        let (s, t) = (random_cloud(&mut rng, n, 1.0), random_cloud(&mut rng, n, 1.0));
+        let (s, t) = (
+            random_cloud(&mut rng, n, 1.0),
+            random_cloud(&mut rng, n, 1.0),
+        );
         let best = brute_force(&s, &t);
         for settings in [ExactSettings::default(), ExactSettings::sparse_only()] {
             let r = exact::solve(&s, &t, &settings).unwrap_or_else(|e| panic!("{e}"));
             let perm = permutation(&r.matching);
             assert_valid_permutation(&perm);
-            assert!((r.loss - best).abs() <= 1e-9, "case {case}: {} vs brute force {best}", r.loss);
+            assert!(
+                (r.loss - best).abs() <= 1e-9,
+                "case {case}: {} vs brute force {best}",
+                r.loss
+            );
             assert!((assignment_cost(&s, &t, &perm) - r.loss).abs() <= 1e-12);
         }
     }
@@ -69,8 +86,14 @@ fn exact_matches_brute_force_for_tiny_clouds() {
 #[test]
 fn dense_reference_potentials_prove_optimality() {
     let mut rng = Rng::new(3);
-    let (s, t) = (random_cloud(&mut rng, 60, 1.0), random_cloud(&mut rng, 60, 1.0));
-    let cost: Vec<f64> = s.points().flat_map(|p| t.points().map(move |q| sq_dist_f64(&p, &q))).collect();
+    let (s, t) = (
+        random_cloud(&mut rng, 60, 1.0),
+        random_cloud(&mut rng, 60, 1.0),
+    );
+    let cost: Vec<f64> = s
+        .points()
+        .flat_map(|p| t.points().map(move |q| sq_dist_f64(&p, &q)))
+        .collect();
     let a = dense::solve_matrix(&cost, 60);
     for i in 0..60 {
         for j in 0..60 {
@@ -84,11 +107,19 @@ fn dense_reference_potentials_prove_optimality() {
 fn sparse_exact_matches_lsap_on_uniform_clouds() {
     let mut rng = Rng::new(11);
     for n in [65, 300, 1000] {
-        let (s, t) = (random_cloud(&mut rng, n, 1.0), random_cloud(&mut rng, n, 1.0));
-        let r = exact::solve(&s, &t, &ExactSettings::sparse_only()).unwrap_or_else(|e| panic!("{e}"));
+        let (s, t) = (
+            random_cloud(&mut rng, n, 1.0),
+            random_cloud(&mut rng, n, 1.0),
+        );
+        let r =
+            exact::solve(&s, &t, &ExactSettings::sparse_only()).unwrap_or_else(|e| panic!("{e}"));
         assert_valid_permutation(&permutation(&r.matching));
         let oracle = lsap_cost(&s, &t);
-        assert!((r.loss - oracle).abs() <= 1e-9 * (1.0 + oracle), "n = {n}: {} vs lsap {oracle}", r.loss);
+        assert!(
+            (r.loss - oracle).abs() <= 1e-9 * (1.0 + oracle),
+            "n = {n}: {} vs lsap {oracle}",
+            r.loss
+        );
     }
 }
 
@@ -96,10 +127,15 @@ fn sparse_exact_matches_lsap_on_uniform_clouds() {
 fn sparse_exact_matches_lsap_and_dense_on_blobs_up_to_2048() {
     for (n, seed) in [(256, 1), (1024, 2), (2048, 3)] {
         let (s, t) = blobs_pair(n, seed).unwrap_or_else(|| panic!("fixture"));
-        let r = exact::solve(&s, &t, &ExactSettings::sparse_only()).unwrap_or_else(|e| panic!("{e}"));
+        let r =
+            exact::solve(&s, &t, &ExactSettings::sparse_only()).unwrap_or_else(|e| panic!("{e}"));
         assert_valid_permutation(&permutation(&r.matching));
         let oracle = lsap_cost(&s, &t);
-        assert!((r.loss - oracle).abs() <= 1e-9 * (1.0 + oracle), "n = {n}: {} vs lsap {oracle}", r.loss);
+        assert!(
+            (r.loss - oracle).abs() <= 1e-9 * (1.0 + oracle),
+            "n = {n}: {} vs lsap {oracle}",
+            r.loss
+        );
         if n <= 256 {
             let d = dense::solve(&s, &t).unwrap_or_else(|e| panic!("{e}"));
             assert!((d.loss - oracle).abs() <= 1e-9 * (1.0 + oracle));

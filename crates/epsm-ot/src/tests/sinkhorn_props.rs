@@ -20,48 +20,96 @@ fn solve(s: &PointCloud, t: &PointCloud, settings: &SinkhornSettings) -> OtResul
 #[test]
 fn marginals_are_within_tolerance() {
     let (s, t) = blobs_pair(1024, 4).unwrap_or_else(|| panic!("fixture"));
-    let r = solve(&s, &t, &SinkhornSettings { blur: 0.03, ..SinkhornSettings::default() });
+    let r = solve(
+        &s,
+        &t,
+        &SinkhornSettings {
+            blur: 0.03,
+            ..SinkhornSettings::default()
+        },
+    );
     let p = plan(&r);
-    assert!(p.marginal_error <= 1e-3, "marginal error {}", p.marginal_error);
+    assert!(
+        p.marginal_error <= 1e-3,
+        "marginal error {}",
+        p.marginal_error
+    );
     assert!(r.loss.is_finite() && r.gradient.iter().flatten().all(|g| g.is_finite()));
 }
 
 #[test]
 fn cost_converges_to_exact_as_blur_shrinks() {
     let (s, t) = blobs_pair(1024, 8).unwrap_or_else(|| panic!("fixture"));
-    let exact = exact::solve(&s, &t, &ExactSettings::default()).unwrap_or_else(|e| panic!("{e}")).loss;
+    let exact = exact::solve(&s, &t, &ExactSettings::default())
+        .unwrap_or_else(|e| panic!("{e}"))
+        .loss;
     let mut previous = f64::INFINITY;
     for blur in [0.2, 0.1, 0.05, 0.03] {
-        let r = solve(&s, &t, &SinkhornSettings { blur, ..SinkhornSettings::default() });
+        let r = solve(
+            &s,
+            &t,
+            &SinkhornSettings {
+                blur,
+                ..SinkhornSettings::default()
+            },
+        );
         let gap = (plan(&r).transport_cost - exact).abs() / exact;
-        assert!(gap < previous + 1e-3, "blur {blur}: gap {gap} did not shrink from {previous}");
+        assert!(
+            gap < previous + 1e-3,
+            "blur {blur}: gap {gap} did not shrink from {previous}"
+        );
         previous = gap;
     }
-    assert!(previous < 0.05, "blur 0.03: transport cost {previous} relative to exact");
+    assert!(
+        previous < 0.05,
+        "blur 0.03: transport cost {previous} relative to exact"
+    );
 }
 
 #[test]
 fn gradient_matches_finite_differences() {
     let mut rng = Rng::new(21);
-    let (s, t) = (random_cloud(&mut rng, 12, 1.0), random_cloud(&mut rng, 12, 1.0));
-    let settings = SinkhornSettings { blur: 0.2, marginal_tolerance: 1e-7, ..SinkhornSettings::default() };
+    let (s, t) = (
+        random_cloud(&mut rng, 12, 1.0),
+        random_cloud(&mut rng, 12, 1.0),
+    );
+    let settings = SinkhornSettings {
+        blur: 0.2,
+        marginal_tolerance: 1e-7,
+        ..SinkhornSettings::default()
+    };
     for debias in [false, true] {
-        let settings = SinkhornSettings { debias, ..settings.clone() };
+        let settings = SinkhornSettings {
+            debias,
+            ..settings.clone()
+        };
         let r = solve(&s, &t, &settings);
         let h = 1e-3f32;
         for (i, d) in [(0, 0), (3, 4), (7, 2), (11, 3)] {
             let shifted = |delta: f32| {
-                let pts: Vec<_> = s.points().enumerate().map(|(k, mut p)| {
-                    if k == i {
-                        p[d] += delta;
-                    }
-                    p
-                }).collect();
-                solve(&PointCloud::from_points(&pts).unwrap_or_else(|e| panic!("{e}")), &t, &settings).loss
+                let pts: Vec<_> = s
+                    .points()
+                    .enumerate()
+                    .map(|(k, mut p)| {
+                        if k == i {
+                            p[d] += delta;
+                        }
+                        p
+                    })
+                    .collect();
+                solve(
+                    &PointCloud::from_points(&pts).unwrap_or_else(|e| panic!("{e}")),
+                    &t,
+                    &settings,
+                )
+                .loss
             };
             let fd = (shifted(h) - shifted(-h)) / (2.0 * f64::from(h));
             let g = f64::from(r.gradient[i][d]);
-            assert!((fd - g).abs() <= 2e-3 * g.abs().max(0.01), "debias {debias}, point {i} axis {d}: fd {fd} vs {g}");
+            assert!(
+                (fd - g).abs() <= 2e-3 * g.abs().max(0.01),
+                "debias {debias}, point {i} axis {d}: fd {fd} vs {g}"
+            );
         }
     }
 }
@@ -78,27 +126,62 @@ fn translated_target_gives_translation_as_gradient() {
         Matcher::Exact(ExactSettings::default()),
     ] {
         let r = matcher.solve(&s, &t).unwrap_or_else(|e| panic!("{e}"));
-        let mean: Vec<f32> = (0..5).map(|d| r.gradient.iter().map(|g| g[d]).sum::<f32>() / n).collect();
+        let mean: Vec<f32> = (0..5)
+            .map(|d| r.gradient.iter().map(|g| g[d]).sum::<f32>() / n)
+            .collect();
         for d in 0..5 {
             let want = -2.0 * shift[d] / n;
-            assert!((mean[d] - want).abs() <= 0.02 * 2.0 * 0.3 / n, "{}: axis {d}: {} vs {want}", matcher.name(), mean[d]);
+            assert!(
+                (mean[d] - want).abs() <= 0.02 * 2.0 * 0.3 / n,
+                "{}: axis {d}: {} vs {want}",
+                matcher.name(),
+                mean[d]
+            );
         }
     }
-    let r = Matcher::Sliced(SlicedSettings { projections: 256, seed: 1 }).solve(&s, &t).unwrap_or_else(|e| panic!("{e}"));
+    let r = Matcher::Sliced(SlicedSettings {
+        projections: 256,
+        seed: 1,
+    })
+    .solve(&s, &t)
+    .unwrap_or_else(|e| panic!("{e}"));
     let mean_x = r.gradient.iter().map(|g| g[3]).sum::<f32>() / n;
-    assert!((mean_x - (-0.6 / n)).abs() <= 0.25 * 0.6 / n, "sliced: {mean_x}");
+    assert!(
+        (mean_x - (-0.6 / n)).abs() <= 0.25 * 0.6 / n,
+        "sliced: {mean_x}"
+    );
 }
 
 #[test]
 fn same_result_with_one_and_two_threads() {
     let (s, t) = blobs_pair(700, 12).unwrap_or_else(|| panic!("fixture"));
-    let entropic = SinkhornSettings { blur: 0.05, ..SinkhornSettings::default() };
-    let debiased = SinkhornSettings { debias: true, ..entropic.clone() };
-    for matcher in [Matcher::Sinkhorn(entropic), Matcher::Sinkhorn(debiased), Matcher::exact(), Matcher::sliced()] {
+    let entropic = SinkhornSettings {
+        blur: 0.05,
+        ..SinkhornSettings::default()
+    };
+    let debiased = SinkhornSettings {
+        debias: true,
+        ..entropic.clone()
+    };
+    for matcher in [
+        Matcher::Sinkhorn(entropic),
+        Matcher::Sinkhorn(debiased),
+        Matcher::exact(),
+        Matcher::sliced(),
+    ] {
         let run = |threads: usize| {
-            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap_or_else(|e| panic!("{e}"));
-            pool.install(|| matcher.solve(&s, &t)).unwrap_or_else(|e| panic!("{e}"))
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap_or_else(|e| panic!("{e}"));
+            pool.install(|| matcher.solve(&s, &t))
+                .unwrap_or_else(|e| panic!("{e}"))
         };
-        assert_eq!(run(1), run(2), "{} differs between 1 and 2 threads", matcher.name());
+        assert_eq!(
+            run(1),
+            run(2),
+            "{} differs between 1 and 2 threads",
+            matcher.name()
+        );
     }
 }
