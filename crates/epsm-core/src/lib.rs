@@ -50,6 +50,7 @@ pub mod colour;
 pub mod constraints;
 pub mod drops;
 pub mod error;
+pub mod field;
 pub mod frame;
 pub mod loss;
 pub mod motion;

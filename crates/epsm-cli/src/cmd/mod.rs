@@ -5,6 +5,8 @@ pub mod bench_manifold;
 pub mod bench_rays;
 pub mod bench_render;
 pub mod check;
+pub mod compare;
+pub mod grad;
 pub mod optimize;
 pub mod plots;
 pub mod render;

@@ -209,6 +209,12 @@ impl Optimization {
         (&self.grad.scene, &self.grad.table)
     }
 
+    /// The match-resolution scene and table, mutably (for probes such as
+    /// [`crate::field::image_derivative`], which restore θ).
+    pub fn match_view_mut(&mut self) -> (&mut Scene, &mut ParamTable) {
+        (&mut self.grad.scene, &mut self.grad.table)
+    }
+
     /// Renders the current θ at the scene resolution.
     pub fn render(&self, spp: u32) -> Image {
         render_image(&self.primal.scene, spp, self.seed(0x5eed))
