@@ -49,8 +49,18 @@ pub struct Summary {
     pub iterations: u32,
     /// Wall seconds of the optimization.
     pub wall_s: f64,
-    /// The rows' curves: `(wall_s, image_rmse, param_error)`.
-    pub curve: Vec<(f64, f64, Option<f64>)>,
+    /// One point per iteration.
+    pub curve: Vec<CurvePoint>,
+}
+
+/// One iteration's errors, for plots.
+pub struct CurvePoint {
+    /// Wall seconds since the start.
+    pub wall_s: f64,
+    /// Image RMSE against the target.
+    pub image_rmse: f64,
+    /// Parameter error, when known.
+    pub param_error: Option<f64>,
 }
 
 /// Applies the command-line overrides to a loaded problem.
@@ -141,10 +151,14 @@ pub fn optimize(problem: Problem, out: &Path, resume: bool) -> anyhow::Result<Su
     let final_image = opt.render(preview_spp);
     save(out, "final", &final_image)?;
     let truth: Vec<Option<f64>> = opt.problem().params.iter().map(|p| p.true_value).collect();
-    let curve: Vec<_> = opt
+    let curve = opt
         .rows()
         .iter()
-        .map(|r| (r.wall_s, r.image_rmse, r.param_error))
+        .map(|r| CurvePoint {
+            wall_s: r.wall_s,
+            image_rmse: r.image_rmse,
+            param_error: r.param_error,
+        })
         .collect();
     let summary = Summary {
         param_error: param_error(opt.theta(), &truth),
@@ -163,14 +177,14 @@ pub fn optimize(problem: Problem, out: &Path, resume: bool) -> anyhow::Result<Su
 
 /// The two panels of a report: image RMSE and parameter error against time.
 pub fn panels(runs: &[(String, &Summary)]) -> Vec<Panel> {
-    let series = |f: &dyn Fn(&(f64, f64, Option<f64>)) -> Option<f64>| {
+    let series = |f: &dyn Fn(&CurvePoint) -> Option<f64>| {
         runs.iter()
             .map(|(name, s)| Series {
                 name: name.clone(),
                 points: s
                     .curve
                     .iter()
-                    .filter_map(|c| f(c).map(|y| (c.0, y)))
+                    .filter_map(|c| f(c).map(|y| (c.wall_s, y)))
                     .collect(),
             })
             .collect()
@@ -178,16 +192,16 @@ pub fn panels(runs: &[(String, &Summary)]) -> Vec<Panel> {
     let mut out = vec![Panel {
         title: "image RMSE".into(),
         y_label: "RMSE (linear RGB)".into(),
-        series: series(&|c| Some(c.1)),
+        series: series(&|c| Some(c.image_rmse)),
     }];
     if runs
         .iter()
-        .any(|(_, s)| s.curve.iter().any(|c| c.2.is_some()))
+        .any(|(_, s)| s.curve.iter().any(|c| c.param_error.is_some()))
     {
         out.push(Panel {
             title: "parameter error".into(),
             y_label: "RMS of θ − θ_true".into(),
-            series: series(&|c| c.2),
+            series: series(&|c| c.param_error),
         });
     }
     out
