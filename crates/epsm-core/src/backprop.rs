@@ -141,7 +141,7 @@ pub fn backprop(input: &PassInput<'_>, records: &[PathRecord]) -> (Vec<f64>, Pas
                 .copied()
                 .unwrap_or(DVec2::ZERO);
             (positions && g != DVec2::ZERO).then(|| {
-                let mut c = classify(r, input.scene, &motion);
+                let mut c = classify(r, input.scene, &motion, &settings);
                 if input.use_ == PathUse::PrimaryOnly {
                     c.paths.retain(|p| p.kind == PathKind::Primary);
                 }

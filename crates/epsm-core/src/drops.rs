@@ -31,7 +31,8 @@ pub enum DropReason {
     /// The path ends at the background (or another non-positional emitter):
     /// no position to differentiate.
     NotDifferentiable,
-    /// The Newton re-solve did not converge (oracle only).
+    /// A Newton re-solve did not converge (projecting a record onto its
+    /// manifold in `classify`, or the oracle at a perturbed θ).
     NewtonFailed,
 }
 

@@ -31,7 +31,7 @@ pub fn motion_field(
         .map(|r| {
             let px = (r.pixel.y * cam.width + r.pixel.x) as usize;
             let (mut sum, mut weight) = (DVec2::ZERO, 0.0);
-            for path in classify(r, scene, &motion)
+            for path in classify(r, scene, &motion, &settings)
                 .paths
                 .iter()
                 .filter(|p| p.params.contains(&param))

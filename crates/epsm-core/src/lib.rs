@@ -43,6 +43,40 @@
 //! - **Robustness** (DESIGN §6): a path that cannot be differentiated reliably
 //!   is dropped with a [`drops::DropReason`] and counted; nothing is clipped or
 //!   scrubbed.
+//! - **On the manifold**: [`classify`] projects each path onto `C = 0` (the
+//!   `f32` record satisfies it to ~1e-7 only), so derivatives are taken at an
+//!   exact solution.
+//!
+//! ## Use
+//!
+//! ```no_run
+//! use epsm_core::{ParamTable, SolveSettings, classify, solve_adjoint};
+//! use epsm_render::record::RecordLevel;
+//! use epsm_render::scene::load::load_scene;
+//! use epsm_render::tracer::{RenderOptions, render_recorded};
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! let scene = load_scene("scenes/mirror.toml".as_ref())?;
+//! let mut table = ParamTable::new(&scene);
+//! table.add("mirror.rotate.y")?;
+//! // Once per iteration: placements and their derivatives at θ.
+//! let motion = table.motion(&table.values());
+//! let settings = SolveSettings::for_radius(scene.radius());
+//! let opts = RenderOptions::from_scene(&scene);
+//! let (_, records) = render_recorded(&scene, &opts, RecordLevel::Full, &|_| {});
+//! let mut grad = vec![0.0; table.len()];
+//! for record in &records {
+//!     for path in classify(record, &scene, &motion, &settings).paths {
+//!         let g_xy = glam::DVec2::new(1.0, 0.0); // ∂L/∂p at the path's pixel
+//!         if let Ok(g) = solve_adjoint(&path, g_xy, &motion, &settings) {
+//!             for (k, v) in g.entries {
+//!                 grad[k] += v;
+//!             }
+//!         }
+//!     }
+//! }
+//! # Ok(())
+//! # }
+//! ```
 
 pub mod backprop;
 pub mod check;

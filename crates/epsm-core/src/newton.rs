@@ -24,14 +24,35 @@ pub struct NewtonSettings {
     pub tolerance: f64,
     /// Give up after this many iterations.
     pub max_iterations: usize,
+    /// After reaching the tolerance, take one more step (to the rounding
+    /// floor): the oracle needs it for accurate finite differences.
+    pub polish: bool,
+}
+
+impl NewtonSettings {
+    /// The oracle's rules: `‖C‖∞ < 1e-13`, then one polishing step.
+    pub fn oracle() -> Self {
+        Self {
+            tolerance: 1e-13,
+            max_iterations: 50,
+            polish: true,
+        }
+    }
+
+    /// Projecting a recorded path onto its manifold (`classify`): the record's
+    /// `f32` vertices satisfy `C = 0` to ~1e-7, one or two steps reach 1e-12.
+    pub fn projection() -> Self {
+        Self {
+            tolerance: 1e-12,
+            max_iterations: 8,
+            polish: false,
+        }
+    }
 }
 
 impl Default for NewtonSettings {
     fn default() -> Self {
-        Self {
-            tolerance: 1e-13,
-            max_iterations: 50,
-        }
+        Self::oracle()
     }
 }
 
@@ -72,6 +93,13 @@ pub fn resolve(
         });
     }
     let (mut r, mut c, mut a) = residual(path, motion, &u, settings)?;
+    if !newton.polish && r < newton.tolerance {
+        return Ok(NewtonSolution {
+            u,
+            iterations: 0,
+            residual: r,
+        });
+    }
     for iteration in 0..newton.max_iterations {
         let step = a
             .clone()
@@ -89,7 +117,7 @@ pub fn resolve(
         };
         match next {
             Some((trial, rt, ct, at)) => {
-                let polished = rt < newton.tolerance && r < newton.tolerance;
+                let polished = rt < newton.tolerance && (r < newton.tolerance || !newton.polish);
                 (u, r, c, a) = (trial, rt, ct, at);
                 if polished || (r < newton.tolerance * 1e-3) {
                     return Ok(NewtonSolution {

@@ -67,7 +67,10 @@ pub struct PixelJacobian {
     pub columns: Vec<DVec2>,
 }
 
-/// A factored `A` that passed the pivot and condition checks.
+/// A factored `A` that passed the pivot and condition checks. The inverse is
+/// formed explicitly: it gives the exact `‖A⁻¹‖₁` and the adjoint solve
+/// `λ = A⁻ᵀ r`; at these sizes (2k ≤ 20) that measured faster than transposed
+/// LU solves with a Hager–Higham estimate of `‖A⁻¹‖₁`.
 pub(crate) struct Factored {
     lu: nalgebra::linalg::FullPivLU<f64, nalgebra::Dyn, nalgebra::Dyn>,
     inverse: DMatrix<f64>,
@@ -82,8 +85,9 @@ fn norm1(m: &DMatrix<f64>) -> f64 {
 }
 
 /// Factors `A` with full pivoting and checks its conditioning.
-pub(crate) fn factor(a: &DMatrix<f64>, settings: &SolveSettings) -> Result<Factored, DropReason> {
-    let lu = a.clone().full_piv_lu();
+pub(crate) fn factor(a: DMatrix<f64>, settings: &SolveSettings) -> Result<Factored, DropReason> {
+    let norm_a = norm1(&a);
+    let lu = a.full_piv_lu();
     let pivots = lu.u().diagonal().map(f64::abs);
     let (lo, hi) = (pivots.min(), pivots.max());
     // Written so that NaN pivots fail too.
@@ -91,7 +95,7 @@ pub(crate) fn factor(a: &DMatrix<f64>, settings: &SolveSettings) -> Result<Facto
         return Err(DropReason::Singular);
     }
     let inverse = lu.try_inverse().ok_or(DropReason::Singular)?;
-    let condition = norm1(a) * norm1(&inverse);
+    let condition = norm_a * norm1(&inverse);
     if !condition.is_finite() {
         return Err(DropReason::NonFinite);
     }
@@ -149,8 +153,11 @@ fn prepare(
     if path.unknowns() == 0 {
         return Ok((state, None));
     }
-    let sys = assemble(path, &state, settings)?;
-    let f = factor(&sys.a, settings)?;
+    let mut sys = assemble(path, &state, settings)?;
+    let f = factor(
+        std::mem::replace(&mut sys.a, DMatrix::zeros(0, 0)),
+        settings,
+    )?;
     Ok((state, Some((sys, f))))
 }
 

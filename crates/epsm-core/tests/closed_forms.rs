@@ -30,7 +30,7 @@ fn pixel_motion(cam: &Camera, x: DVec3, dx: DVec3) -> DVec2 {
 /// The only path of `kind` in the record, re-solved onto `C = 0`.
 fn solved(record: &PathRecord, scene: &Scene, table: &ParamTable, kind: PathKind) -> DiffPath {
     let motion = table.motion(&table.values());
-    let paths = classify(record, scene, &motion).paths;
+    let paths = classify(record, scene, &motion, &SolveSettings::for_radius(1.0)).paths;
     let path = paths
         .iter()
         .find(|p| p.kind == kind)

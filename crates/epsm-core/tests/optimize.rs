@@ -64,8 +64,8 @@ kind = "ot_exact"
 match_resolution = [32, 32]
 
 [optimizer]
-iterations = 12
-lr = 0.08
+iterations = 10
+lr = 0.1
 decay = 1.0
 
 [render]
@@ -151,13 +151,13 @@ true = 0.8
 #[test]
 fn a_resumed_run_follows_the_uninterrupted_trajectory() {
     let mut p = tiny(TRANSLATE);
-    p.optimizer.iterations = 6;
+    p.optimizer.iterations = 4;
     let mut whole = Optimization::new(p.clone()).expect("setup");
     while !whole.is_done() {
         whole.step().expect("iteration");
     }
     let mut first = Optimization::new(p.clone()).expect("setup");
-    for _ in 0..3 {
+    for _ in 0..2 {
         first.step().expect("iteration");
     }
     let json = serde_json::to_string(&first.checkpoint()).expect("serialise");

@@ -31,11 +31,16 @@ fn run(
         };
         random_params(&mut s.table, &s.objects, &s.lights, &mut rng);
         let motion = s.table.motion(&s.table.values());
-        for p in classify(&s.record, &s.scene, &motion)
-            .paths
-            .iter()
-            .filter(|p| p.kind == kind)
-        {
+        let classified = classify(&s.record, &s.scene, &motion, &settings.solve);
+        // Projection drops count against the kind under test.
+        report
+            .kinds
+            .entry(kind)
+            .or_default()
+            .dropped
+            .merge(&classified.skipped);
+        done += classified.skipped.total() as usize;
+        for p in classified.paths.iter().filter(|p| p.kind == kind) {
             if let Ok(g) = solve_adjoint(p, DVec2::new(0.3, 0.7), &motion, &settings.solve) {
                 assert!(
                     g.entries.iter().all(|(_, v)| v.is_finite()),

@@ -20,13 +20,14 @@ struct Reference {
     loose: Option<(f64, f64)>,
 }
 
-/// Margin (world distance to the triangle's edges, `t` range) below which a
-/// hit counts as a tie that `f32` may decide either way.
+/// Margin (world distance to the triangle's edges, in units of the scene's
+/// size `unit`) below which a hit counts as a tie `f32` may decide either way.
 const MARGIN: f64 = 2e-5;
 
-/// Tolerance on `t` of a hit at `t` with `|cos|` between ray and normal.
-fn t_tol(t: f64, cos: f64, dir_len: f64) -> f64 {
-    1e-5 * t.abs().max(1.0 / dir_len) / cos.max(1e-3)
+/// Tolerance on `t` of a hit at `t` with `|cos|` between ray and normal, for
+/// a ray direction of length `dir_len` in a scene of size `unit`.
+fn t_tol(t: f64, cos: f64, dir_len: f64, unit: f64) -> f64 {
+    1e-5 * (t.abs() + unit / dir_len) / cos.max(1e-3)
 }
 
 /// The `f64` ray test of one triangle: `(t, min edge distance, |cos|)`.
@@ -43,7 +44,7 @@ fn reference_hit(object: &Object, tri: u32, o: DVec3, d: DVec3) -> Option<(f64, 
     (area2 > 0.0).then_some((h.t, margin, cos))
 }
 
-fn brute_force(objects: &[Object], ray: &Ray) -> Reference {
+fn brute_force(objects: &[Object], ray: &Ray, unit: f64) -> Reference {
     let (o, d) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
     let (t_min, t_max) = (ray.t_min as f64, ray.t_max as f64);
     let mut r = Reference::default();
@@ -52,15 +53,16 @@ fn brute_force(objects: &[Object], ray: &Ray) -> Reference {
             let Some((t, margin, cos)) = reference_hit(object, tri, o, d) else {
                 continue;
             };
-            let tol = t_tol(t, cos, d.length());
-            if margin >= -MARGIN
+            let tol = t_tol(t, cos, d.length(), unit);
+            if margin >= -MARGIN * unit
                 && t >= t_min - tol
                 && t <= t_max + tol
                 && r.loose.is_none_or(|l| t < l.0)
             {
                 r.loose = Some((t, tol));
             }
-            let certain = margin >= MARGIN && cos > 1e-2 && t >= t_min + tol && t <= t_max - tol;
+            let certain =
+                margin >= MARGIN * unit && cos > 1e-2 && t >= t_min + tol && t <= t_max - tol;
             if certain && r.strict.is_none_or(|s| t < s.0) {
                 r.strict = Some((t, id as u32, tri));
             }
@@ -103,10 +105,11 @@ fn random_ray(rng: &mut Rng, lo: DVec3, hi: DVec3) -> Ray {
 /// returns the number of rays with a certain hit.
 fn check_against_brute_force(rng: &mut Rng, objects: &[Object], accel: &Accel, n: usize) -> usize {
     let (lo, hi) = accel.world_bounds().expect("scene has geometry");
+    let unit = (hi - lo).max_element() / 4.0;
     let (mut certain, mut exact, mut hits) = (0, 0, 0);
     for i in 0..n {
         let ray = random_ray(rng, lo, hi);
-        let reference = brute_force(objects, &ray);
+        let reference = brute_force(objects, &ray, unit);
         let hit = accel.closest_hit(&ray);
         assert_eq!(
             accel.occluded(&ray),
@@ -117,16 +120,16 @@ fn check_against_brute_force(rng: &mut Rng, objects: &[Object], accel: &Accel, n
             certain += 1;
             let h =
                 hit.unwrap_or_else(|| panic!("ray {i}: missed certain hit at t = {t}: {ray:?}"));
-            let tol = t_tol(t, 1.0, ray.dir.as_dvec3().length());
+            let tol = t_tol(t, 1.0, ray.dir.as_dvec3().length(), unit);
             assert!(
-                (h.t as f64) <= t + tol + 1e-5 * t,
+                (h.t as f64) <= t + tol,
                 "ray {i}: hit {h:?} beyond certain t = {t}"
             );
             exact += usize::from(h.object == object && h.triangle == triangle);
         }
         if let Some(h) = hit {
             hits += 1;
-            verify_hit(objects, &ray, &h, i);
+            verify_hit(objects, &ray, &h, unit, i);
             let (t_loose, tol) = reference
                 .loose
                 .expect("a hit must be a loose reference hit");
@@ -145,14 +148,14 @@ fn check_against_brute_force(rng: &mut Rng, objects: &[Object], accel: &Accel, n
 }
 
 /// The reported triangle is really hit at the reported `t` and barycentrics.
-fn verify_hit(objects: &[Object], ray: &Ray, h: &Hit, i: usize) {
+fn verify_hit(objects: &[Object], ray: &Ray, h: &Hit, unit: f64, i: usize) {
     let object = &objects[h.object as usize];
     let (o, d) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
     let (t, margin, cos) =
         reference_hit(object, h.triangle, o, d).expect("reported triangle is hittable");
-    let tol = t_tol(t, cos, d.length());
+    let tol = t_tol(t, cos, d.length(), unit);
     assert!(
-        margin >= -MARGIN,
+        margin >= -MARGIN * unit,
         "ray {i}: {h:?} lies outside its triangle by {margin}"
     );
     assert!(
@@ -179,15 +182,36 @@ fn random_scenes_match_brute_force() {
 }
 
 #[test]
+fn tiny_and_huge_scenes_match_brute_force() {
+    // Scaled by 1e-4 the whole scene is closer than obvhs's fixed 1e-4 slab
+    // clamp; scaled by 1e4 coordinates are large.
+    let mut rng = Rng(13);
+    for scale in [1e-4, 1e4] {
+        let mut objects = random_scene(&mut rng);
+        for o in &mut objects {
+            o.world_from_object = DAffine3::from_scale(DVec3::splat(scale)) * o.world_from_object;
+        }
+        let accel = Accel::build(&objects);
+        assert!(check_against_brute_force(&mut rng, &objects, &accel, 1500) > 150);
+    }
+}
+
+#[test]
 fn moved_instances_match_brute_force_without_new_blas() {
     let mut rng = Rng(11);
     let mut objects = random_scene(&mut rng);
     let mut accel = Accel::build(&objects);
     let before = accel.stats();
-    for round in 0..3 {
-        for id in [0, 2, 4 + round % 2] {
+    for round in 0..4 {
+        let ids = [0, 2, 4 + round % 2];
+        for id in ids {
             objects[id].world_from_object = random_transform(&mut rng, round == 1);
-            accel.update_instance(&objects, id as u32);
+            if round < 3 {
+                accel.update_instance(&objects, id as u32);
+            }
+        }
+        if round == 3 {
+            accel.update_instances(&objects, &ids.map(|id| id as u32));
         }
         check_against_brute_force(&mut rng, &objects, &accel, 800);
     }
@@ -221,4 +245,64 @@ fn shared_meshes_share_blas_and_empty_meshes_are_skipped() {
     assert!(empty.world_bounds().is_none());
     assert!(empty.closest_hit(&Ray::new(Vec3::ZERO, Vec3::X)).is_none());
     assert!(!empty.occluded(&Ray::new(Vec3::ZERO, Vec3::X)));
+}
+
+#[test]
+fn closed_mesh_has_no_leaks_at_edges_and_vertices() {
+    let mut rng = Rng(17);
+    let mesh = Arc::new(bvh_util::cube_sphere(6));
+    let obj = object("s".into(), &mesh, random_transform(&mut rng, false));
+    let accel = Accel::build(std::slice::from_ref(&obj));
+    let w = obj.world_from_object;
+    let mut leaks = 0;
+    for k in 0..20_000 {
+        // Aim at a vertex or at a point on an edge, from inside or from far
+        // outside (then only at points facing the origin, away from the
+        // silhouette the rounded ray could legitimately pass).
+        let [a, b, _] =
+            mesh.indices[rng.below(mesh.len())].map(|i| mesh.positions[i as usize].as_dvec3());
+        let target = if k % 2 == 0 {
+            a
+        } else {
+            a + (b - a) * rng.f64()
+        };
+        let local_origin = if k % 3 == 0 {
+            let o = rng.range(10.0, 1000.0) * rng.unit();
+            if (o - target).normalize().dot(target.normalize()) < 0.5 {
+                continue;
+            }
+            o
+        } else {
+            0.5 * rng.dvec3(-0.5, 0.5)
+        };
+        let origin = w.transform_point3(local_origin);
+        let ray = Ray::new(
+            origin.as_vec3(),
+            (w.transform_point3(target) - origin).as_vec3(),
+        );
+        leaks += usize::from(accel.closest_hit(&ray).is_none());
+    }
+    assert_eq!(leaks, 0, "rays escaped through edges or vertices");
+}
+
+#[test]
+fn degenerate_rays_never_hit() {
+    let mut rng = Rng(19);
+    let objects = random_scene(&mut rng);
+    let accel = Accel::build(&objects);
+    let (lo, hi) = accel.world_bounds().expect("geometry");
+    let centre = (0.5 * (lo + hi)).as_vec3();
+    for ray in [
+        Ray::new(centre, Vec3::ZERO),
+        Ray::new(Vec3::splat(f32::NAN), Vec3::X),
+        Ray::new(centre, Vec3::new(f32::NAN, 1.0, 0.0)),
+        Ray {
+            t_min: 2.0,
+            t_max: 1.0,
+            ..Ray::new(centre, Vec3::Y)
+        },
+    ] {
+        assert_eq!(accel.closest_hit(&ray), None, "{ray:?}");
+        assert!(!accel.occluded(&ray), "{ray:?}");
+    }
 }

@@ -10,6 +10,9 @@ pub enum BenchCommand {
     /// BVH build and update time and closest-hit / occlusion rays per second
     /// on a bumpy sphere (coherent and incoherent rays, 1 and all threads).
     Rays(super::bench_rays::RaysBenchArgs),
+    /// Optimal-transport matching of two synthetic RGBXY images (coloured
+    /// blobs on a noisy background): seconds, loss, marginal error, memory.
+    Ot(super::bench_ot::OtBenchArgs),
 }
 
 /// Runs one benchmark.
@@ -18,5 +21,6 @@ pub fn run(cmd: &BenchCommand) -> anyhow::Result<()> {
         BenchCommand::Render(a) => super::bench_render::run(a),
         BenchCommand::Manifold(a) => super::bench_manifold::run(a),
         BenchCommand::Rays(a) => super::bench_rays::run(a),
+        BenchCommand::Ot(a) => super::bench_ot::run(a),
     }
 }

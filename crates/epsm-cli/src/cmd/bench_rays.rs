@@ -14,18 +14,21 @@
 //! | `--triangles` | triangles in the sphere | 100000 | ≥ 20 |
 //! | `--rays` | rays per measurement | 1000000 | ≥ 1 |
 //! | `--threads` | rayon threads (one run) | 1 and 2 | ≥ 1 |
+//! | `--repeat` | runs per measurement, fastest reported | 3 | ≥ 1 |
 //! | `--json` | print one JSON object | off | — |
 //!
 //! `cargo run --release -p epsm-cli -- bench rays --json`
+
+mod scene;
 
 use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::Context;
 use epsm_render::bvh::Accel;
-use epsm_render::scene::{Mesh, Object};
+use epsm_render::scene::Object;
 use epsm_render::{Camera, Ray};
-use glam::{DAffine3, DQuat, DVec3, Vec2, Vec3};
+use glam::{DVec3, Vec2};
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -41,6 +44,9 @@ pub struct RaysBenchArgs {
     /// Rayon threads (default: measure 1 and 2).
     #[arg(long)]
     pub threads: Option<usize>,
+    /// Runs of each measurement; the fastest counts (the machine may be shared).
+    #[arg(long, default_value_t = 3)]
+    pub repeat: usize,
     /// Print one JSON object instead of text.
     #[arg(long)]
     pub json: bool,
@@ -53,6 +59,9 @@ struct Throughput {
     rays: &'static str,
     query: &'static str,
     mrays_per_s: f64,
+    /// Rays per CPU-second of the process (Linux only): the rate per busy
+    /// core, insensitive to other processes taking the cores.
+    mrays_per_cpu_s: Option<f64>,
     hit_fraction: f64,
 }
 
@@ -69,8 +78,8 @@ struct Report {
 
 /// Runs the benchmark.
 pub fn run(args: &RaysBenchArgs) -> anyhow::Result<()> {
-    let mesh = Arc::new(bumpy_sphere(args.triangles));
-    let objects = scene(&mesh);
+    let mesh = Arc::new(scene::bumpy_sphere(args.triangles));
+    let objects = scene::scene(&mesh);
     let mut accel = Accel::build(&objects);
     let build_seconds = accel.stats().build_seconds;
     let tlas_update_seconds = tlas_update(&mut accel, objects);
@@ -93,22 +102,36 @@ pub fn run(args: &RaysBenchArgs) -> anyhow::Result<()> {
             camera.ray(film)
         })
         .collect();
-    let incoherent = random_rays(args.rays, lo, hi);
+    let incoherent = scene::random_rays(args.rays, lo, hi);
 
     let thread_counts = args.threads.map_or(vec![1, 2], |n| vec![n]);
+    // All pools live to the end: a thread exiting mid-measurement would take
+    // its CPU time out of the process total.
+    let pools = thread_counts
+        .iter()
+        .map(|&n| rayon::ThreadPoolBuilder::new().num_threads(n).build())
+        .collect::<Result<Vec<_>, _>>()?;
     let mut throughput = Vec::new();
-    for &threads in &thread_counts {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()?;
+    for (&threads, pool) in thread_counts.iter().zip(&pools) {
         for (name, rays) in [("coherent", &coherent), ("incoherent", &incoherent)] {
             for query in ["closest", "occluded"] {
-                let (seconds, hits) = pool.install(|| measure(&accel, rays, query == "occluded"));
+                let runs = (0..args.repeat.max(1))
+                    .map(|_| pool.install(|| measure(&accel, rays, query == "occluded")));
+                let best = runs.fold(None, |best: Option<Run>, run| match best {
+                    Some(b) if b.seconds <= run.seconds => Some(b),
+                    _ => Some(run),
+                });
+                let Run {
+                    seconds,
+                    cpu_seconds,
+                    hits,
+                } = best.context("no run")?;
                 throughput.push(Throughput {
                     threads,
                     rays: name,
                     query,
                     mrays_per_s: rays.len() as f64 / seconds / 1e6,
+                    mrays_per_cpu_s: cpu_seconds.map(|c| rays.len() as f64 / c / 1e6),
                     hit_fraction: hits as f64 / rays.len() as f64,
                 });
             }
@@ -141,19 +164,40 @@ fn print(report: &Report, json: bool) -> anyhow::Result<()> {
     );
     for t in &report.throughput {
         println!(
-            "{} thread(s) {:>10} {:>8}: {:6.2} Mrays/s ({:.0}% hit)",
+            "{} thread(s) {:>10} {:>8}: {:6.2} Mrays/s, {:6.2} Mrays/CPU-s ({:.0}% hit)",
             t.threads,
             t.rays,
             t.query,
             t.mrays_per_s,
+            t.mrays_per_cpu_s.unwrap_or(f64::NAN),
             t.hit_fraction * 100.0
         );
     }
     Ok(())
 }
 
-/// Traces all rays in parallel chunks; returns seconds and the hit count.
-fn measure(accel: &Accel, rays: &[Ray], occlusion: bool) -> (f64, usize) {
+/// One timed pass over a ray set.
+#[derive(Clone, Copy)]
+struct Run {
+    seconds: f64,
+    cpu_seconds: Option<f64>,
+    hits: usize,
+}
+
+/// CPU time used so far by all threads of this process, seconds (Linux:
+/// the first field of each `/proc/self/task/*/schedstat`, nanoseconds).
+fn cpu_seconds() -> Option<f64> {
+    let mut total = 0u64;
+    for task in std::fs::read_dir("/proc/self/task").ok()? {
+        let stat = std::fs::read_to_string(task.ok()?.path().join("schedstat")).ok()?;
+        total += stat.split_whitespace().next()?.parse::<u64>().ok()?;
+    }
+    Some(total as f64 * 1e-9)
+}
+
+/// Traces all rays in parallel chunks.
+fn measure(accel: &Accel, rays: &[Ray], occlusion: bool) -> Run {
+    let cpu_start = cpu_seconds();
     let start = Instant::now();
     let hits = rays
         .par_chunks(1024)
@@ -170,7 +214,18 @@ fn measure(accel: &Accel, rays: &[Ray], occlusion: bool) -> (f64, usize) {
                 .count()
         })
         .sum();
-    (start.elapsed().as_secs_f64(), hits)
+    let seconds = start.elapsed().as_secs_f64();
+    // The kernel updates a running thread's total at scheduler ticks (a few
+    // ms), so very short runs may read zero: report nothing then.
+    let cpu_seconds = cpu_seconds()
+        .zip(cpu_start)
+        .map(|(end, start)| end - start)
+        .filter(|&c| c > 0.0);
+    Run {
+        seconds,
+        cpu_seconds,
+        hits,
+    }
 }
 
 /// Mean time of moving one instance and updating the top level, seconds.
@@ -180,128 +235,8 @@ fn tlas_update(accel: &mut Accel, mut objects: Vec<Object>) -> f64 {
     for k in 0..MOVES {
         let angle = k as f64 * 0.01;
         objects[1].world_from_object =
-            placement(DVec3::new(2.5 * angle.cos(), 0.0, 2.5 * angle.sin()), 0.4);
+            scene::placement(DVec3::new(2.5 * angle.cos(), 0.0, 2.5 * angle.sin()), 0.4);
         accel.update_instance(&objects, 1);
     }
     start.elapsed().as_secs_f64() / MOVES as f64
-}
-
-fn placement(at: DVec3, scale: f64) -> DAffine3 {
-    DAffine3::from_scale_rotation_translation(DVec3::splat(scale), DQuat::from_rotation_y(at.x), at)
-}
-
-/// The big sphere at the origin and four smaller instances around it.
-fn scene(mesh: &Arc<Mesh>) -> Vec<Object> {
-    let mut places = vec![DAffine3::IDENTITY];
-    places.extend((0..4).map(|k| {
-        let a = k as f64 * std::f64::consts::FRAC_PI_2 + 0.3;
-        placement(
-            DVec3::new(2.5 * a.cos(), 0.3 * k as f64 - 0.5, 2.5 * a.sin()),
-            0.4,
-        )
-    }));
-    places
-        .into_iter()
-        .enumerate()
-        .map(|(i, world_from_object)| Object {
-            name: format!("sphere{i}"),
-            mesh: Arc::clone(mesh),
-            world_from_object,
-            material: 0,
-            emission: None,
-        })
-        .collect()
-}
-
-/// Uniform origins in the box `[lo, hi]` and uniform directions.
-fn random_rays(n: usize, lo: DVec3, hi: DVec3) -> Vec<Ray> {
-    let mut state = 0x2545_F491_4F6C_DD1Du64;
-    let mut uniform = move || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        (state >> 40) as f32 / (1u64 << 24) as f32
-    };
-    let (lo, size) = (lo.as_vec3(), (hi - lo).as_vec3());
-    (0..n)
-        .map(|_| {
-            let origin = lo + size * Vec3::new(uniform(), uniform(), uniform());
-            let z = 1.0 - 2.0 * uniform();
-            let phi = std::f32::consts::TAU * uniform();
-            let r = (1.0 - z * z).max(0.0).sqrt();
-            Ray::new(origin, Vec3::new(r * phi.cos(), r * phi.sin(), z))
-        })
-        .collect()
-}
-
-/// A unit geodesic sphere with about `triangles` triangles (20·k²), displaced
-/// radially by ±10 % of sines.
-fn bumpy_sphere(triangles: usize) -> Mesh {
-    let k = ((triangles as f64 / 20.0).sqrt().round() as u32).max(1);
-    let t = (1.0 + 5f32.sqrt()) / 2.0;
-    let v = [
-        [-1.0, t, 0.0],
-        [1.0, t, 0.0],
-        [-1.0, -t, 0.0],
-        [1.0, -t, 0.0],
-        [0.0, -1.0, t],
-        [0.0, 1.0, t],
-        [0.0, -1.0, -t],
-        [0.0, 1.0, -t],
-        [t, 0.0, -1.0],
-        [t, 0.0, 1.0],
-        [-t, 0.0, -1.0],
-        [-t, 0.0, 1.0],
-    ]
-    .map(Vec3::from);
-    let faces = [
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    let displace = |p: Vec3| {
-        let d = p.normalize();
-        let bump = (9.0 * d.x).sin() * (7.0 * d.y).sin() * (8.0 * d.z).sin()
-            + 0.3 * (31.0 * d.x + 17.0 * d.z).sin();
-        d * (1.0 + 0.08 * bump)
-    };
-    let mut mesh = Mesh::default();
-    for [a, b, c] in faces {
-        let base = mesh.positions.len() as u32;
-        let row_start = |i: u32| base + i * (k + 1) - i * (i.saturating_sub(1)) / 2;
-        for i in 0..=k {
-            for j in 0..=(k - i) {
-                let (u, w) = (i as f32 / k as f32, j as f32 / k as f32);
-                mesh.positions
-                    .push(displace(v[a] + (v[b] - v[a]) * u + (v[c] - v[a]) * w));
-            }
-        }
-        for i in 0..k {
-            let (r0, r1) = (row_start(i), row_start(i + 1));
-            for j in 0..(k - i) {
-                mesh.indices.push([r0 + j, r1 + j, r0 + j + 1]);
-                if j + 1 < k - i {
-                    mesh.indices.push([r0 + j + 1, r1 + j, r1 + j + 1]);
-                }
-            }
-        }
-    }
-    mesh
 }

@@ -75,11 +75,12 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
         .collect();
     let records = trace_samples(&scene, &opts, &samples, RecordLevel::Full);
     let motion = table.motion(&table.values());
+    let settings = CheckSettings::for_radius(scene.radius());
     let mut paths = Vec::new();
     let mut skipped = DropCounts::default();
     let mut per_kind = [0usize; PathKind::ALL.len()];
     for record in &records {
-        let c = classify(record, &scene, &motion);
+        let c = classify(record, &scene, &motion, &settings.solve);
         skipped.merge(&c.skipped);
         for p in c.paths {
             let n = &mut per_kind[p.kind as usize];
@@ -89,7 +90,6 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
             }
         }
     }
-    let settings = CheckSettings::for_radius(scene.radius());
     let report = check_paths(&paths, &table, &motion, &settings);
     if args.json {
         println!("{}", to_json(&report));

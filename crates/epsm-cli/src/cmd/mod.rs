@@ -2,6 +2,7 @@
 
 pub mod bench;
 pub mod bench_manifold;
+pub mod bench_ot;
 pub mod bench_rays;
 pub mod bench_render;
 pub mod check;

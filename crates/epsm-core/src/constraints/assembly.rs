@@ -44,7 +44,10 @@ pub(crate) struct State {
 /// Evaluates the nodes at unknowns `u` (`2 × unknowns` values; missing = 0).
 pub(crate) fn evaluate(path: &DiffPath, motion: &Motion, u: &[f64]) -> State {
     let local = |param: usize| path.params.binary_search(&param).ok();
-    let mut s = State::default();
+    let mut s = State {
+        nodes: Vec::with_capacity(path.nodes.len()),
+        grads: Vec::with_capacity(2 * path.nodes.len()),
+    };
     for (i, node) in path.nodes.iter().enumerate() {
         let mut push = |j: Option<usize>, dx: DVec3, dn: DVec3| {
             if let Some(j) = j {

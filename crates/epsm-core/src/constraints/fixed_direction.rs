@@ -3,10 +3,14 @@
 //! The first diffuse vertex `D` of a caustic path camera → D → S⁺ → L keeps
 //! receiving light from the same direction in its own transported frame; `c`
 //! is the value at the base configuration. The alternative, "the last chain
-//! segment toward the light keeps its world direction"
-//! ([`segment`], used in tests only), agrees with it when the receiver
-//! neither moves nor rotates with θ and differs when it does: a rotating
-//! receiver turns its local direction with it, a fixed world segment does not.
+//! segment toward the light keeps its world direction" (`segment`, tests
+//! only), gives the same `dp/dθ` when the light moves or the receiver
+//! translates (a fixed specular chain maps the direction at one end one to
+//! one onto the direction at the other), and a different one when the
+//! receiver rotates (here the incoming direction turns with the receiver's
+//! frame) or the chain itself moves (here the direction arriving at D is
+//! kept, there the one leaving L). See `receiver_tests.rs` for the
+//! measurement.
 
 use nalgebra::{RealField, Vector3};
 

@@ -7,7 +7,8 @@
 //! `ŵi = (a − x)/ℓi`, `ŵo = (b − x)/ℓo`. With `P_w = I − w wᵀ`:
 //! `∂ŵ/∂(end) = P_ŵ/ℓ`, so `∂C_r/∂a`, `∂C_r/∂b` are `(∂W/∂·)ᵀ r` for the
 //! frame rows `r ∈ {s, t}`, `∂C_r/∂x = −(∂C_r/∂a + ∂C_r/∂b)`, and
-//! `∂C_r/∂n` comes from [`BaseFrame::project_gradient`].
+//! `∂C_r/∂n` comes from [`crate::frame::BaseFrame::project_gradient`]. The value itself is
+//! always [`Constraint::eval`]'s.
 
 use glam::DVec3;
 
@@ -29,14 +30,14 @@ impl Constraint {
         let [s, t] = f
             .tangents(&crate::constraints::na::<f64>(n))
             .map(|v| glam3(&v));
-        // W, the constant k, and r ↦ ((∂W/∂a)ᵀ r, (∂W/∂b)ᵀ r).
-        let (w, k, frame_rows): (DVec3, [f64; 2], [DVec3; 2]) = match self.kind {
-            ConstraintKind::Specular { eta, .. } => (wi + wo * eta, [0.0; 2], [s, t]),
-            ConstraintKind::Glossy { m } => ((wi + wo).normalize(), m, [s, t]),
-            ConstraintKind::FixedDirection { c } => (wo, c, [s, t]),
-            ConstraintKind::Collinear => (wi - wo, [0.0; 2], [s, t]),
+        // W and the frame rows; r ↦ ((∂W/∂a)ᵀ r, (∂W/∂b)ᵀ r) below.
+        let (w, frame_rows): (DVec3, [DVec3; 2]) = match self.kind {
+            ConstraintKind::Specular { eta, .. } => (wi + wo * eta, [s, t]),
+            ConstraintKind::Glossy { .. } => ((wi + wo).normalize(), [s, t]),
+            ConstraintKind::FixedDirection { .. } => (wo, [s, t]),
+            ConstraintKind::Collinear => (wi - wo, [s, t]),
             #[cfg(test)]
-            ConstraintKind::Segment { c } => ((b - a).normalize(), c, [f.s0, f.t0]),
+            ConstraintKind::Segment { .. } => ((b - a).normalize(), [f.s0, f.t0]),
         };
         let ends = |r: DVec3| -> [DVec3; 2] {
             match self.kind {
@@ -72,7 +73,8 @@ impl Constraint {
             grad[row] = [ga, gx, gb, grad_n[row]];
         }
         Local {
-            value: [frame_rows[0].dot(w) - k[0], frame_rows[1].dot(w) - k[1]],
+            // The value from the one generic definition of C.
+            value: self.value(a, x, b, n),
             grad,
         }
     }

@@ -125,7 +125,7 @@ fn receiver_and_segment_constraints_agree_unless_the_receiver_rotates_or_the_cha
     }
     let motion = table.motion(&table.values());
     let settings = SolveSettings::for_radius(1.0);
-    let paths = classify(&record, &scene, &motion).paths;
+    let paths = classify(&record, &scene, &motion, &settings).paths;
     let receiver = paths
         .iter()
         .find(|p| p.kind == PathKind::Caustic)

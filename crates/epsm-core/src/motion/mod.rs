@@ -150,7 +150,8 @@ impl ParamTable {
         }
     }
 
-    /// Evaluates `f` on the offsets of `params` lifted to `T` by `lift(param, value)`.
+    /// The offsets the parameters `params` apply, each value lifted to `T` by
+    /// `lift(param, value)` (duals seed one parameter's derivative).
     fn offsets<T: RealField + Copy>(
         &self,
         params: &[usize],

@@ -13,7 +13,10 @@ use epsm_core::{ParamTable, PathKind, classify};
 #[allow(unused_imports)]
 pub use synth::{End, Rng, Spec, Synth, Vertex, build};
 
-/// Classifies a synthetic configuration and checks its paths of `kind`.
+/// Classifies a synthetic configuration and checks its paths of `kind`;
+/// paths dropped by `classify` (its projection) count as drops of `kind`
+/// (a synthetic record holds one path of interest). Returns the paths
+/// accounted for.
 pub fn check_kind(
     s: &Synth,
     kind: PathKind,
@@ -21,8 +24,14 @@ pub fn check_kind(
     report: &mut CheckReport,
 ) -> usize {
     let motion = s.table.motion(&s.table.values());
-    let classified = classify(&s.record, &s.scene, &motion);
-    let mut n = 0;
+    let classified = classify(&s.record, &s.scene, &motion, &settings.solve);
+    report
+        .kinds
+        .entry(kind)
+        .or_default()
+        .dropped
+        .merge(&classified.skipped);
+    let mut n = classified.skipped.total() as usize;
     for p in classified.paths.iter().filter(|p| p.kind == kind) {
         report.add(
             kind,

@@ -18,15 +18,18 @@ mod tlas;
 mod triangle;
 
 use std::collections::HashMap;
+use std::fmt;
+use std::sync::Arc;
 use std::time::Instant;
 
 use glam::{DVec3, UVec2, Vec3A};
+use obvhs::cwbvh::Traversal;
 
 use crate::hit::{self, Hit, SurfacePoint};
 use crate::ray::Ray;
 use crate::scene::{Mesh, Object, ObjectId};
 use blas::{Blas, SlotHit};
-use node::{TraceRay, intersect_node};
+use node::TraceRay;
 use tlas::{Instance, Tlas};
 
 /// Marks an object without an instance.
@@ -51,14 +54,23 @@ pub struct AccelStats {
     pub bytes: usize,
 }
 
-/// Per-object BVHs and a top level over their instances.
-#[derive(Clone, Debug, Default)]
+/// Per-mesh BVHs and a top level over their instances. Cloning is cheap in
+/// the bottom levels (shared, immutable); `Debug` prints the statistics only.
+#[derive(Clone, Default)]
 pub struct Accel {
-    blases: Vec<Blas>,
+    blases: Vec<Arc<Blas>>,
     instances: Vec<Instance>,
     instance_of_object: Vec<u32>,
     tlas: Tlas,
     stats: AccelStats,
+}
+
+impl fmt::Debug for Accel {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Accel")
+            .field("stats", &self.stats)
+            .finish_non_exhaustive()
+    }
 }
 
 impl Accel {
@@ -70,13 +82,16 @@ impl Accel {
             ..Self::default()
         };
         let mut blas_of_mesh: HashMap<*const Mesh, Option<u32>> = HashMap::new();
+        let mut all = 0;
         for (id, object) in objects.iter().enumerate() {
             let blases = &mut accel.blases;
+            let all = &mut all;
             let blas = *blas_of_mesh
-                .entry(std::sync::Arc::as_ptr(&object.mesh))
+                .entry(Arc::as_ptr(&object.mesh))
                 .or_insert_with(|| {
+                    *all += object.mesh.len();
                     let built = Blas::build(&object.mesh)?;
-                    blases.push(built);
+                    blases.push(Arc::new(built));
                     Some(blases.len() as u32 - 1)
                 });
             if let Some(blas) = blas {
@@ -90,17 +105,7 @@ impl Accel {
                 ));
             }
         }
-        let mut unique_meshes: Vec<&Mesh> = Vec::new();
-        for object in objects {
-            if !unique_meshes
-                .iter()
-                .any(|m| std::ptr::eq(*m, &*object.mesh))
-            {
-                unique_meshes.push(&object.mesh);
-            }
-        }
-        let hittable: usize = accel.blases.iter().map(Blas::len).sum();
-        let all: usize = unique_meshes.iter().map(|m| m.len()).sum();
+        let hittable: usize = accel.blases.iter().map(|b| b.len()).sum();
         accel.stats.degenerate_triangles = all - hittable;
         accel.rebuild_tlas();
         accel.stats.build_seconds = start.elapsed().as_secs_f64();
@@ -108,17 +113,24 @@ impl Accel {
     }
 
     /// Re-reads object `id`'s transform and rebuilds the top level (no
-    /// bottom-level BVH is touched). Ids without an instance are ignored.
+    /// bottom-level BVH is touched). Ids without an instance are ignored. The
+    /// object's mesh must be the one the BVH was built with.
     pub fn update_instance(&mut self, objects: &[Object], id: ObjectId) {
-        let Some(&index) = self.instance_of_object.get(id as usize) else {
-            return;
-        };
-        if index == NO_INSTANCE {
-            return;
+        self.update_instances(objects, &[id]);
+    }
+
+    /// [`Accel::update_instance`] for several objects with one top-level
+    /// rebuild (moving many objects at once costs one rebuild, not one each).
+    pub fn update_instances(&mut self, objects: &[Object], ids: &[ObjectId]) {
+        for &id in ids {
+            let Some(&index) = self.instance_of_object.get(id as usize) else {
+                continue;
+            };
+            if let Some(instance) = self.instances.get_mut(index as usize) {
+                let local = &self.blases[instance.blas as usize].bounds;
+                instance.place(local, &objects[id as usize].world_from_object);
+            }
         }
-        let instance = &mut self.instances[index as usize];
-        let local = &self.blases[instance.blas as usize].bounds;
-        instance.place(local, &objects[id as usize].world_from_object);
         self.rebuild_tlas();
     }
 
@@ -128,8 +140,8 @@ impl Accel {
         self.stats.tlas_seconds = start.elapsed().as_secs_f64();
         self.stats.objects = self.instances.len();
         self.stats.blas_count = self.blases.len();
-        self.stats.triangles = self.blases.iter().map(Blas::len).sum();
-        self.stats.bytes = self.blases.iter().map(Blas::bytes).sum::<usize>()
+        self.stats.triangles = self.blases.iter().map(|b| b.len()).sum();
+        self.stats.bytes = self.blases.iter().map(|b| b.bytes()).sum::<usize>()
             + self.tlas.bytes()
             + self.instances.len() * size_of::<Instance>()
             + self.instance_of_object.len() * 4;
@@ -166,9 +178,10 @@ impl Accel {
         );
         let mut best = SlotHit::default();
         let mut best_instance = NO_INSTANCE;
-        let mut state = self.tlas.bvh.new_traversal(world.dir);
+        let mut state = self.tlas.bvh.traversal(&world);
+        let mut blas_state = Traversal::default();
         let mut node;
-        obvhs::traverse!(self.tlas.bvh, node, state, intersect_node(node, &world), {
+        obvhs::traverse!(self.tlas.bvh, node, state, node.intersect(&world), {
             let index = self.tlas.slots[state.primitive_id as usize];
             let instance = &self.instances[index as usize];
             if let Some(placement) = &instance.placement {
@@ -179,7 +192,11 @@ impl Accel {
                     world.t_min,
                     world.t_max,
                 );
-                if self.blases[instance.blas as usize].trace::<ANY>(&mut local, &mut best) {
+                if self.blases[instance.blas as usize].trace::<ANY>(
+                    &mut local,
+                    &mut blas_state,
+                    &mut best,
+                ) {
                     if ANY {
                         return Some(self.hit(index, best, local.t_max));
                     }

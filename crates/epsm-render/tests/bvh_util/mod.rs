@@ -129,3 +129,42 @@ pub fn random_scene(rng: &mut Rng) -> Vec<Object> {
         .map(|(i, &m)| object(format!("o{i}"), &meshes[m], random_transform(rng, i == 2)))
         .collect()
 }
+
+/// A closed unit "cube sphere": the surface of the integer grid cube
+/// `[-n, n]³` with each vertex normalised, `48·n²` outward-facing triangles
+/// sharing their vertices (one `f32` position per grid point).
+pub fn cube_sphere(n: i32) -> Mesh {
+    let mut mesh = Mesh::default();
+    let mut index = std::collections::HashMap::new();
+    let mut vertex = |mesh: &mut Mesh, p: [i32; 3]| {
+        *index.entry(p).or_insert_with(|| {
+            let v = Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32).normalize();
+            mesh.positions.push(v);
+            mesh.positions.len() as u32 - 1
+        })
+    };
+    for axis in 0..3 {
+        for side in [-n, n] {
+            for i in -n..n {
+                for j in -n..n {
+                    let at = |a: i32, b: i32| {
+                        let mut p = [0; 3];
+                        p[axis] = side;
+                        p[(axis + 1) % 3] = a;
+                        p[(axis + 2) % 3] = b;
+                        p
+                    };
+                    let q = [at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)]
+                        .map(|p| vertex(&mut mesh, p));
+                    let tris = if side > 0 {
+                        [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]
+                    } else {
+                        [[q[0], q[2], q[1]], [q[0], q[3], q[2]]]
+                    };
+                    mesh.indices.extend(tris);
+                }
+            }
+        }
+    }
+    mesh
+}

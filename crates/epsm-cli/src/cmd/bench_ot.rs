@@ -1,0 +1,145 @@
+//! `epsm bench ot`: time one optimal-transport solve on the synthetic blobs pair.
+//!
+//! Generates `epsm_ot::synthetic::blobs_pair(n, seed)` (two images of moved,
+//! resized and recoloured blobs, points `(r, g, b, x, y)` with λ = 1), solves
+//! it with the chosen matcher and prints one human-readable line, or with
+//! `--json` exactly one JSON object:
+//!
+//! | field              | meaning                                                     |
+//! |--------------------|-------------------------------------------------------------|
+//! | `n`                | points per cloud                                            |
+//! | `solver`           | `exact`, `sinkhorn` or `sliced`                             |
+//! | `seconds`          | wall time of the solve (fixture generation excluded)        |
+//! | `loss`             | the matcher's loss                                          |
+//! | `transport_cost`   | primal cost `⟨π, C⟩` (sinkhorn), the loss otherwise         |
+//! | `marginal_error`   | L1 source-marginal error (sinkhorn), else null              |
+//! | `iterations`       | Sinkhorn updates / exact re-solve rounds / projections      |
+//! | `pair_evaluations` | kernel or cost evaluations                                  |
+//! | `pair_evals_per_s` | `pair_evaluations / seconds` (sinkhorn), else null          |
+//! | `peak_rss_mb`      | peak resident memory of the process (VmHWM)                 |
+//! | `threads`          | rayon threads                                               |
+//!
+//! ```text
+//! epsm bench ot --n 4096 --solver exact --json
+//! ```
+
+use std::time::Instant;
+
+use anyhow::{Context, bail};
+use epsm_ot::{Matcher, Matching, SinkhornSettings, synthetic};
+use serde::Serialize;
+
+/// Which matcher to benchmark.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum OtSolver {
+    /// Exact assignment (verified optimal).
+    Exact,
+    /// Entropic OT (ε-scaling Sinkhorn).
+    Sinkhorn,
+    /// Approximate sliced OT.
+    Sliced,
+}
+
+/// Arguments of `epsm bench ot`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct OtBenchArgs {
+    /// Points per cloud (the image side is ⌈√n⌉).
+    #[arg(long, default_value_t = 4096)]
+    pub n: usize,
+    /// Matcher to time.
+    #[arg(long, value_enum, default_value_t = OtSolver::Exact)]
+    pub solver: OtSolver,
+    /// Print exactly one JSON object instead of a human line.
+    #[arg(long)]
+    pub json: bool,
+    /// Seed of the synthetic blobs pair.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Sinkhorn blur (ε = blur²).
+    #[arg(long, default_value_t = 0.01)]
+    pub blur: f64,
+}
+
+/// One benchmark measurement, as printed with `--json`.
+#[derive(Debug, Serialize)]
+struct Report {
+    n: usize,
+    solver: &'static str,
+    seconds: f64,
+    loss: f64,
+    transport_cost: f64,
+    marginal_error: Option<f64>,
+    iterations: usize,
+    pair_evaluations: u64,
+    pair_evals_per_s: Option<f64>,
+    peak_rss_mb: Option<f64>,
+    threads: usize,
+}
+
+/// Peak resident set size in MB, from `VmHWM` in `/proc/self/status` (Linux only).
+fn peak_rss_mb() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb / 1024.0)
+}
+
+/// Runs the benchmark and prints its report.
+pub fn run(args: &OtBenchArgs) -> anyhow::Result<()> {
+    if args.n == 0 {
+        bail!("--n must be at least 1");
+    }
+    let (source, target) =
+        synthetic::blobs_pair(args.n, args.seed).context("generating the blobs pair")?;
+    let matcher = match args.solver {
+        OtSolver::Exact => Matcher::exact(),
+        OtSolver::Sinkhorn => Matcher::Sinkhorn(SinkhornSettings {
+            blur: args.blur,
+            ..SinkhornSettings::default()
+        }),
+        OtSolver::Sliced => Matcher::sliced(),
+    };
+    let start = Instant::now();
+    let result = matcher
+        .solve(&source, &target)
+        .with_context(|| format!("solving with {}", matcher.name()))?;
+    let seconds = start.elapsed().as_secs_f64();
+    let (transport_cost, marginal_error) = match &result.matching {
+        Matching::Entropic(plan) => (plan.transport_cost, Some(plan.marginal_error)),
+        _ => (result.loss, None),
+    };
+    let pairs = result.stats.pair_evaluations;
+    let report = Report {
+        n: args.n,
+        solver: matcher.name(),
+        seconds,
+        loss: result.loss,
+        transport_cost,
+        marginal_error,
+        iterations: result.stats.iterations,
+        pair_evaluations: pairs,
+        pair_evals_per_s: (args.solver == OtSolver::Sinkhorn).then(|| pairs as f64 / seconds),
+        peak_rss_mb: peak_rss_mb(),
+        threads: rayon::current_num_threads(),
+    };
+    if args.json {
+        println!("{}", serde_json::to_string(&report)?);
+    } else {
+        println!(
+            "ot {} n={} {:.3}s loss={:.6} cost={:.6} marginal_error={} pairs/s={} peak={} MB",
+            report.solver,
+            report.n,
+            report.seconds,
+            report.loss,
+            report.transport_cost,
+            report
+                .marginal_error
+                .map_or("-".into(), |e| format!("{e:.2e}")),
+            report
+                .pair_evals_per_s
+                .map_or("-".into(), |p| format!("{p:.3e}")),
+            report.peak_rss_mb.map_or("?".into(), |m| format!("{m:.1}")),
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,181 @@
+//! What `classify` makes of each record pattern (DESIGN §5.4), including
+//! the unknown/fixed layout, parameter selection and background endings.
+
+mod common;
+
+use common::{End, Rng, Spec, Vertex, build, random_params};
+use epsm_core::paths::Node;
+use epsm_core::{DropReason, PathKind, SolveSettings, classify};
+use glam::Vec3;
+
+fn kinds(spec: &Spec, seed: u64) -> Vec<(PathKind, usize, usize)> {
+    let mut rng = Rng(seed);
+    let mut s = loop {
+        if let Some(s) = build(spec, &mut rng) {
+            break s;
+        }
+    };
+    random_params(&mut s.table, &s.objects, &s.lights, &mut rng);
+    let motion = s.table.motion(&s.table.values());
+    let c = classify(
+        &s.record,
+        &s.scene,
+        &motion,
+        &SolveSettings::for_radius(1.0),
+    );
+    assert_eq!(c.skipped.total(), 0);
+    c.paths
+        .iter()
+        .map(|p| {
+            let unknown = p
+                .nodes
+                .iter()
+                .filter(|n| {
+                    matches!(
+                        n,
+                        Node::Surface {
+                            unknown: Some(_),
+                            ..
+                        }
+                    )
+                })
+                .count();
+            assert_eq!(unknown, p.unknowns(), "one constraint per unknown");
+            (p.kind, p.nodes.len(), unknown)
+        })
+        .collect()
+}
+
+#[test]
+fn each_record_pattern_yields_its_paths_with_the_right_unknowns() {
+    let chain = vec![Vertex::Mirror, Vertex::Glass { ior: 1.5 }];
+    let glossy = vec![Vertex::Mirror, Vertex::Glossy { alpha: 0.2 }];
+    // camera → S S → D: chain to surface (2 unknowns, D fixed) and the primary path.
+    assert_eq!(
+        kinds(
+            &Spec::new(PathKind::ChainToSurface, chain.clone(), End::Surface),
+            1
+        ),
+        vec![(PathKind::ChainToSurface, 4, 2), (PathKind::Primary, 2, 0)]
+    );
+    // camera → S S → emitter: chain to a light.
+    assert_eq!(
+        kinds(
+            &Spec::new(PathKind::ChainToLight, chain.clone(), End::Emitter),
+            2
+        ),
+        vec![(PathKind::ChainToLight, 4, 2), (PathKind::Primary, 2, 0)]
+    );
+    // camera → S S(glossy) ⇢ point light: chain to light through next-event estimation.
+    assert_eq!(
+        kinds(
+            &Spec::new(PathKind::ChainToLight, glossy.clone(), End::PointNee),
+            3
+        ),
+        vec![(PathKind::ChainToLight, 4, 2), (PathKind::Primary, 2, 0)]
+    );
+    // camera → D → S S → emitter: caustic with D and both S unknown.
+    assert_eq!(
+        kinds(&Spec::new(PathKind::Caustic, chain, End::Emitter), 4),
+        vec![(PathKind::Caustic, 5, 3), (PathKind::Primary, 2, 0)]
+    );
+    // camera → D → S S(glossy) ⇢ area light.
+    assert_eq!(
+        kinds(&Spec::new(PathKind::Caustic, glossy, End::AreaNee), 5),
+        vec![(PathKind::Caustic, 5, 3), (PathKind::Primary, 2, 0)]
+    );
+    // camera → D ⇢ occluder ⇢ light: shadow (camera, D, occluder, light).
+    assert_eq!(
+        kinds(&Spec::new(PathKind::Shadow, Vec::new(), End::PointNee), 6),
+        vec![(PathKind::Shadow, 4, 1), (PathKind::Primary, 2, 0)]
+    );
+}
+
+#[test]
+fn background_endings_are_counted_and_untouched_paths_are_not_returned() {
+    let mut rng = Rng(7);
+    let mut s = loop {
+        if let Some(s) = build(
+            &Spec::new(PathKind::ChainToSurface, vec![Vertex::Mirror], End::Surface),
+            &mut rng,
+        ) {
+            break s;
+        }
+    };
+    // The chain escapes instead of reaching D.
+    s.record.vertices.pop();
+    s.record.escaped = Vec3::ONE;
+    let motion = s.table.motion(&s.table.values());
+    let c = classify(
+        &s.record,
+        &s.scene,
+        &motion,
+        &SolveSettings::for_radius(1.0),
+    );
+    assert!(
+        c.paths.is_empty(),
+        "no parameter is bound: nothing is returned"
+    );
+    assert_eq!(c.skipped.get(DropReason::NotDifferentiable), 1);
+    s.table.add("o0.translate.x").expect("valid key");
+    let motion = s.table.motion(&s.table.values());
+    let c = classify(
+        &s.record,
+        &s.scene,
+        &motion,
+        &SolveSettings::for_radius(1.0),
+    );
+    assert_eq!(
+        c.paths.iter().map(|p| p.kind).collect::<Vec<_>>(),
+        vec![PathKind::Primary]
+    );
+}
+
+#[test]
+fn a_path_carries_only_the_parameters_of_what_it_touches() {
+    let mut rng = Rng(11);
+    let mut s = loop {
+        if let Some(s) = build(
+            &Spec::new(PathKind::ChainToSurface, vec![Vertex::Mirror], End::Surface),
+            &mut rng,
+        ) {
+            break s;
+        }
+    };
+    // Every axis of every object and the camera yaw are bound; the primary
+    // path touches one object, the chain three.
+    for name in &s.objects {
+        for axis in ["x", "y", "z"] {
+            s.table
+                .add(&format!("{name}.translate.{axis}"))
+                .expect("valid key");
+        }
+    }
+    s.table.add("camera.yaw").expect("valid key");
+    let motion = s.table.motion(&s.table.values());
+    for p in classify(
+        &s.record,
+        &s.scene,
+        &motion,
+        &SolveSettings::for_radius(1.0),
+    )
+    .paths
+    {
+        let objects: std::collections::BTreeSet<u32> = p
+            .nodes
+            .iter()
+            .filter_map(|n| match n {
+                Node::Surface { anchor, .. } => Some(anchor.object),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(p.params.len(), 3 * objects.len() + 1, "{}", p.kind.name());
+        for &param in &p.params {
+            let key = &s.table.params()[param].key;
+            assert!(
+                key == "camera.yaw" || objects.iter().any(|o| key.starts_with(&format!("o{o}."))),
+                "{key}"
+            );
+        }
+    }
+}

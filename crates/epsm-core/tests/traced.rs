@@ -1,0 +1,117 @@
+//! Newton agreement on paths traced by the renderer in the shipped scenes
+//! (translations and rotations of every object, point-light and camera
+//! moves), per path type.
+
+use std::path::Path;
+
+use epsm_core::check::{CheckSettings, check_paths};
+use epsm_core::{ParamTable, PathKind, classify};
+use epsm_render::record::RecordLevel;
+use epsm_render::scene::load::load_scene;
+use epsm_render::tracer::{PixelSample, RenderOptions, trace_samples};
+use glam::UVec2;
+
+const PER_TYPE: usize = 80;
+
+fn check_scene(name: &str, expected: &[PathKind]) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenes")
+        .join(name);
+    let scene = load_scene(&path).expect("shipped scene loads");
+    let mut table = ParamTable::new(&scene);
+    table.add_default_geometry().expect("default parameters");
+    for o in scene.objects() {
+        table
+            .add(&format!("{}.rotate.y", o.name))
+            .expect("rotation");
+    }
+    table.add("camera.yaw").expect("camera yaw");
+    let opts = RenderOptions::from_scene(&scene);
+    let (w, h) = (scene.camera().width, scene.camera().height);
+    let samples: Vec<PixelSample> = (0..3000u32)
+        .map(|i| {
+            let k = u64::from(i).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 20;
+            PixelSample {
+                pixel: UVec2::new((k % u64::from(w)) as u32, ((k >> 16) % u64::from(h)) as u32),
+                sample: i % opts.spp,
+            }
+        })
+        .collect();
+    let motion = table.motion(&table.values());
+    let settings = CheckSettings::for_radius(scene.radius());
+    let mut paths = Vec::new();
+    let mut count = [0usize; PathKind::ALL.len()];
+    for record in trace_samples(&scene, &opts, &samples, RecordLevel::Full) {
+        for p in classify(&record, &scene, &motion, &settings.solve).paths {
+            if count[p.kind as usize] < PER_TYPE {
+                count[p.kind as usize] += 1;
+                paths.push(p);
+            }
+        }
+    }
+    let report = check_paths(&paths, &table, &motion, &settings);
+    for kind in expected {
+        let r = report
+            .kinds
+            .get(kind)
+            .unwrap_or_else(|| panic!("{name}: no {} paths", kind.name()));
+        let bad = r.ill_conditioned + r.dropped.total() as usize;
+        eprintln!(
+            "{name} {}: {} checked, max {:.1e}, bad {bad}",
+            kind.name(),
+            r.checked(),
+            r.max_rel_err()
+        );
+        assert!(
+            r.max_rel_err() <= 1e-6,
+            "{name} {}: {:e}",
+            kind.name(),
+            r.max_rel_err()
+        );
+        assert!(
+            r.max_adjoint_rel_err <= 1e-10,
+            "{name} {}: adjoint {:e}",
+            kind.name(),
+            r.max_adjoint_rel_err
+        );
+        assert!(
+            bad * 20 <= r.checked().max(1),
+            "{name} {}: {bad} ill-conditioned or dropped",
+            kind.name()
+        );
+    }
+}
+
+#[test]
+fn traced_highlight_paths_agree_with_newton() {
+    check_scene(
+        "highlight.toml",
+        &[
+            PathKind::Primary,
+            PathKind::ChainToLight,
+            PathKind::Caustic,
+            PathKind::Shadow,
+        ],
+    );
+}
+
+#[test]
+fn traced_mirror_and_glass_paths_agree_with_newton() {
+    check_scene(
+        "mirror.toml",
+        &[PathKind::Primary, PathKind::ChainToSurface],
+    );
+    check_scene(
+        "caustic-box.toml",
+        &[
+            PathKind::Primary,
+            PathKind::ChainToSurface,
+            PathKind::Shadow,
+        ],
+    );
+}
+
+#[test]
+fn traced_shadow_paths_agree_with_newton() {
+    check_scene("shadows.toml", &[PathKind::Primary, PathKind::Shadow]);
+}

@@ -1,0 +1,282 @@
+//! One path: the bounce loop of the forward tracer (emission, next-event
+//! estimation, BSDF sampling, Russian roulette) and its recording.
+
+use glam::Vec3;
+
+use super::{DIMS_PER_BOUNCE, RenderOptions, SHADOW_EPS, TraceCounters};
+use crate::frame::Frame;
+use crate::hit::SurfacePoint;
+use crate::materials::{Material, VertexKind};
+use crate::ray::{Ray, offset_origin};
+use crate::record::{
+    ConnectionRecord, OccluderRecord, PathRecord, RecordLevel, TrianglePoint, VertexRecord,
+};
+use crate::sampler::PixelSampler;
+use crate::scene::Scene;
+
+/// The recording state of one path.
+pub(super) struct Recording<'a> {
+    pub(super) level: RecordLevel,
+    pub(super) rec: &'a mut PathRecord,
+    /// Set once the level's last vertex has been recorded.
+    pub(super) done: bool,
+}
+
+/// Power heuristic (β = 2) weight of a strategy with pdf `a` against `b`.
+#[inline]
+fn mis(a: f32, b: f32) -> f32 {
+    let (a2, b2) = (a * a, b * b);
+    if a2 + b2 > 0.0 { a2 / (a2 + b2) } else { 0.0 }
+}
+
+/// Traces a path from a camera ray; returns its radiance.
+pub(super) fn trace_path(
+    scene: &Scene,
+    opts: &RenderOptions,
+    mut ray: Ray,
+    sampler: &mut PixelSampler,
+    mut rec: Option<&mut Recording<'_>>,
+    counters: &mut TraceCounters,
+) -> Vec3 {
+    let objects = scene.objects();
+    let lights = scene.lights();
+    let mut radiance = Vec3::ZERO;
+    let mut beta = Vec3::ONE;
+    // Product of η² over refractions, to undo radiance scaling in roulette.
+    let mut eta_scale = 1.0f32;
+    // The previous vertex: position and the pdf of the direction it sampled
+    // (`None` when that was a delta lobe or the camera: no MIS).
+    let mut prev: Option<(Vec3, f32)> = None;
+
+    for depth in 0..opts.max_depth {
+        sampler.set_dimension(2 + depth * DIMS_PER_BOUNCE);
+        counters.rays += 1;
+
+        // Find the next vertex; rays that leave see the background.
+        let Some(hit) = scene.accel().closest_hit(&ray) else {
+            let dir = ray.dir.normalize();
+            let le = scene.background().eval(dir);
+            if le != Vec3::ZERO {
+                let w = prev.map_or(1.0, |(_, pdf)| mis(pdf, lights.pdf_background(dir)));
+                radiance += beta * le * w;
+                if let Some(r) = rec.as_deref_mut().filter(|r| !r.done) {
+                    r.rec.escaped += beta * le * w;
+                }
+            }
+            break;
+        };
+        let sp = scene.accel().surface_point(objects, &hit);
+        let object = &objects[hit.object as usize];
+        let material = &scene.materials()[object.material as usize];
+        let wi_world = -ray.dir.normalize();
+        let mut contribution = Vec3::ZERO;
+
+        // Emission hit by BSDF sampling (front face only).
+        if let Some(le) = object.emission
+            && sp.ng.dot(wi_world) > 0.0
+        {
+            let w = prev.map_or(1.0, |(p_prev, pdf)| {
+                mis(
+                    pdf,
+                    lights.pdf_area(hit.object, hit.triangle, p_prev, sp.p, sp.ng),
+                )
+            });
+            contribution += beta * le * w;
+        }
+
+        let frame = Frame::from_normal(sp.ns);
+        let wi = frame.to_local(wi_world);
+        let kind = material.vertex_kind();
+
+        // Next-event estimation toward a light.
+        let record_at = rec
+            .as_deref()
+            .filter(|r| !r.done && r.level >= RecordLevel::FirstDiffuse)
+            .map(|r| r.rec.vertices.len() as u32);
+        let shading = Shading {
+            sp: &sp,
+            frame: &frame,
+            wi,
+            wi_world,
+            material,
+        };
+        let nee = next_event(scene, &shading, beta, sampler, record_at, counters);
+        contribution += nee.contribution;
+        let connection = nee.connection;
+        radiance += contribution;
+
+        // Sample the BSDF to continue.
+        let u_lobe = sampler.next_1d();
+        let u_dir = sampler.next_2d();
+        let sample = material.sample(wi, sp.uv, u_lobe, u_dir);
+        let mut next = None;
+        if let Some(bs) = sample {
+            let wo_world = frame.to_world(bs.wo);
+            let reflect = !bs.lobe.is_transmission();
+            let same_side = wo_world.dot(sp.ng) * wi_world.dot(sp.ng) > 0.0;
+            if same_side == reflect {
+                next = Some((bs, wo_world));
+            } else {
+                counters.leaks += 1;
+            }
+        }
+
+        if let Some(r) = rec.as_deref_mut().filter(|r| !r.done) {
+            let at = TrianglePoint {
+                object: hit.object,
+                triangle: hit.triangle,
+                b1: hit.b1,
+                b2: hit.b2,
+            };
+            let (lobe, eta, m) = next.map_or((None, 1.0, sp.ns), |(bs, _)| {
+                (Some(bs.lobe), bs.eta, frame.to_world(bs.m))
+            });
+            r.rec.vertices.push(VertexRecord {
+                at,
+                p: sp.p,
+                ng: sp.ng,
+                ns: sp.ns,
+                kind,
+                lobe,
+                eta,
+                m,
+                throughput: beta,
+                contribution,
+            });
+            r.rec.connections.extend(connection);
+            r.done = match r.level {
+                RecordLevel::Primary => true,
+                RecordLevel::FirstDiffuse => kind == VertexKind::Diffuse,
+                RecordLevel::Full => false,
+            };
+        }
+
+        let Some((bs, wo_world)) = next else { break };
+        beta *= bs.weight;
+        if bs.lobe.is_transmission() {
+            eta_scale *= bs.eta * bs.eta;
+        }
+        prev = Some((sp.p, bs.pdf)).filter(|_| !bs.lobe.is_delta());
+        let side = if wo_world.dot(sp.ng) >= 0.0 {
+            sp.ng
+        } else {
+            -sp.ng
+        };
+        ray = Ray::new(offset_origin(sp.p, side), wo_world);
+
+        // Russian roulette on the throughput with radiance scaling undone.
+        if depth + 1 >= opts.rr_depth {
+            let q = (beta.max_element() * eta_scale).min(0.95);
+            if q <= 0.0 || sampler.next_1d() >= q {
+                break;
+            }
+            beta /= q;
+        }
+        if beta == Vec3::ZERO {
+            break;
+        }
+    }
+    radiance
+}
+
+/// A shading point as next-event estimation sees it.
+struct Shading<'a> {
+    sp: &'a SurfacePoint,
+    frame: &'a Frame,
+    /// Direction toward the previous vertex, local frame.
+    wi: Vec3,
+    /// The same, world space.
+    wi_world: Vec3,
+    material: &'a Material,
+}
+
+/// What next-event estimation at one vertex added.
+struct NextEvent {
+    /// Radiance added (zero when blocked or no light was sampled).
+    contribution: Vec3,
+    /// The connection, when recording at vertex index `record_at`.
+    connection: Option<ConnectionRecord>,
+}
+
+/// Samples a light, evaluates the BSDF toward it, MIS-weights against BSDF
+/// sampling and traces the shadow ray. Consumes three random numbers.
+fn next_event(
+    scene: &Scene,
+    at: &Shading<'_>,
+    beta: Vec3,
+    sampler: &mut PixelSampler,
+    record_at: Option<u32>,
+    counters: &mut TraceCounters,
+) -> NextEvent {
+    let mut out = NextEvent {
+        contribution: Vec3::ZERO,
+        connection: None,
+    };
+    let u_select = sampler.next_1d();
+    let u_light = sampler.next_2d();
+    if at.material.is_delta() {
+        return out;
+    }
+    let Some(ls) = scene.lights().sample(at.sp.p, u_select, u_light) else {
+        return out;
+    };
+    let wo = at.frame.to_local(ls.wo);
+    let f = at.material.eval(at.wi, wo, at.sp.uv);
+    let same_side = ls.wo.dot(at.sp.ng) * at.wi_world.dot(at.sp.ng) > 0.0;
+    if f == Vec3::ZERO || !same_side || ls.pdf <= 0.0 {
+        return out;
+    }
+    let w = if ls.delta {
+        1.0
+    } else {
+        mis(ls.pdf, at.material.pdf(at.wi, wo, at.sp.uv))
+    };
+    let unoccluded = beta * f * ls.radiance * (w / ls.pdf);
+    let shadow = shadow_ray(at.sp, ls.wo, ls.position, ls.dist);
+    counters.shadow_rays += 1;
+    let blocked = scene.accel().occluded(&shadow);
+    if !blocked {
+        out.contribution = unoccluded;
+    }
+    out.connection = record_at.map(|vertex| ConnectionRecord {
+        vertex,
+        light: ls.source,
+        light_position: ls.position,
+        light_normal: ls.normal,
+        contribution: out.contribution,
+        unoccluded,
+        occluder: blocked.then(|| first_occluder(scene, &shadow)).flatten(),
+    });
+    out
+}
+
+/// The shadow ray from surface point `sp` toward a light point `y` (or along
+/// `wo` for the background when `dist` is infinite).
+fn shadow_ray(sp: &SurfacePoint, wo: Vec3, y: Vec3, dist: f32) -> Ray {
+    let side = if wo.dot(sp.ng) >= 0.0 { sp.ng } else { -sp.ng };
+    let origin = offset_origin(sp.p, side);
+    if dist.is_finite() {
+        Ray {
+            origin,
+            dir: y - origin,
+            t_min: 0.0,
+            t_max: 1.0 - SHADOW_EPS,
+        }
+    } else {
+        Ray::new(origin, wo)
+    }
+}
+
+fn first_occluder(scene: &Scene, shadow: &Ray) -> Option<OccluderRecord> {
+    let hit = scene.accel().closest_hit(shadow)?;
+    let sp = scene.accel().surface_point(scene.objects(), &hit);
+    Some(OccluderRecord {
+        at: TrianglePoint {
+            object: hit.object,
+            triangle: hit.triangle,
+            b1: hit.b1,
+            b2: hit.b2,
+        },
+        p: sp.p,
+    })
+}
