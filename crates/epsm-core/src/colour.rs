@@ -20,7 +20,8 @@
 //! | `albedo.r/g/b` (diffuse) | exact |
 //! | `alpha` (rough conductor) | central difference, `h = 1e-3·max(α, 1e-3)` |
 //! | `emission` | exact |
-//! | `ior`, geometric parameters | not covered here: they move content through `dp/dθ` |
+//! | translation of an emitter or point light | next-event connections: `∂ ln(cos·cos/r²)/∂θ` at fixed light-sample coordinates |
+//! | `ior`, other geometric parameters | not covered here: they move content through `dp/dθ` |
 
 use epsm_render::Scene;
 use epsm_render::frame::Frame;
@@ -49,6 +50,10 @@ pub struct ColourModel {
     materials: Vec<Vec<Probe>>,
     /// Per object id, `(param, current scale)` of its emission.
     emission: Vec<Option<(usize, f32)>>,
+    /// Translations of emitters: `(param, ∂y/∂θ)` per emissive object id.
+    area_moves: Vec<Vec<(usize, Vec3)>>,
+    /// Translations of point lights: `(param, ∂y/∂θ)` per light index.
+    point_moves: Vec<Vec<(usize, Vec3)>>,
 }
 
 /// `material` with the value of `target` set to `value` (unchanged when the
@@ -72,6 +77,9 @@ impl ColourModel {
     pub fn new(table: &ParamTable, scene: &Scene) -> Self {
         let mut materials = vec![Vec::new(); scene.materials().len()];
         let mut emission = vec![None; scene.objects().len()];
+        let mut area_moves = vec![Vec::new(); scene.objects().len()];
+        let mut point_moves = vec![Vec::new(); scene.point_lights().len()];
+        let axis = |a: usize| Vec3::AXES[a.min(2)];
         for (param, p) in table.params().iter().enumerate() {
             let v = p.value as f32;
             match p.target {
@@ -97,18 +105,37 @@ impl ColourModel {
                         *e = Some((param, v));
                     }
                 }
+                Target::Translate { object, axis: a } => {
+                    let emits = scene
+                        .objects()
+                        .get(object as usize)
+                        .is_some_and(|o| o.emission.is_some());
+                    if emits {
+                        area_moves[object as usize].push((param, axis(a)));
+                    }
+                }
+                Target::LightTranslate { light, axis: a } => {
+                    if let Some(m) = point_moves.get_mut(light) {
+                        m.push((param, axis(a)));
+                    }
+                }
                 _ => {}
             }
         }
         Self {
             materials,
             emission,
+            area_moves,
+            point_moves,
         }
     }
 
     /// Whether any parameter changes colours through this model.
     pub fn is_empty(&self) -> bool {
-        self.materials.iter().all(Vec::is_empty) && self.emission.iter().all(Option::is_none)
+        self.materials.iter().all(Vec::is_empty)
+            && self.emission.iter().all(Option::is_none)
+            && self.area_moves.iter().all(Vec::is_empty)
+            && self.point_moves.iter().all(Vec::is_empty)
     }
 
     /// `dc/dθ` of one path sample as `(parameter, ∂c/∂θ per channel)`
@@ -168,9 +195,46 @@ impl ColourModel {
             {
                 out.push((*param, c.contribution / *s));
             }
+            let Some(x) = v.get(c.vertex as usize) else {
+                continue;
+            };
+            let moves = match c.light {
+                LightPoint::Area { object, .. } => self.area_moves.get(object as usize),
+                LightPoint::Point { index } => self.point_moves.get(index as usize),
+                LightPoint::Background => None,
+            };
+            for &(param, e) in moves.into_iter().flatten() {
+                out.push((
+                    param,
+                    c.contribution
+                        * moved_light_rate(x.p, x.ns, c.light_position, c.light_normal, e),
+                ));
+            }
         }
         out
     }
+}
+
+/// `∂ ln c/∂θ` of a next-event connection from `x` (shading normal `n`) to
+/// a light point `y` (normal `n_l`, zero for point lights) translated at
+/// rate `e = ∂y/∂θ`, at fixed light-sample coordinates: the connection
+/// carries `cos_x · cos_l / r²` (area light; the area pdf is unchanged by a
+/// translation) or `cos_x / r²` (point light), with `d = y − x`:
+/// `(n·e)/(n·d) + (n_l·e)/(n_l·d) − 4(d·e)/r²`, or `(n·e)/(n·d) − 3(d·e)/r²`.
+fn moved_light_rate(x: Vec3, n: Vec3, y: Vec3, n_l: Vec3, e: Vec3) -> f32 {
+    let d = y - x;
+    let r2 = d.length_squared();
+    let (nd, nld) = (n.dot(d), n_l.dot(d));
+    if r2 <= 0.0 || nd == 0.0 {
+        return 0.0;
+    }
+    let mut rate = n.dot(e) / nd - 2.0 * d.dot(e) / r2;
+    if n_l != Vec3::ZERO && nld != 0.0 {
+        rate += n_l.dot(e) / nld - 2.0 * d.dot(e) / r2;
+    } else {
+        rate -= d.dot(e) / r2;
+    }
+    if rate.is_finite() { rate } else { 0.0 }
 }
 
 /// `∂ ln f/∂θ` per channel at fixed local directions (0 where `f = 0`).
@@ -184,4 +248,35 @@ fn ratio(probe: &Probe, wi: Vec3, wo: Vec3) -> Vec3 {
         d / f.max(Vec3::splat(1e-20)),
         Vec3::ZERO,
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn moved_light_rate_matches_a_finite_difference() {
+        let (x, n) = (Vec3::new(0.1, 0.0, -0.2), Vec3::Y);
+        let (y, n_l) = (Vec3::new(0.5, 2.0, 0.3), -Vec3::Y);
+        let carried = |y: Vec3, area: bool| {
+            let d = y - x;
+            let r = d.length();
+            let cos_l = if area { n_l.dot(-d) / r } else { 1.0 };
+            n.dot(d) / r * cos_l / (r * r)
+        };
+        for (e, area) in [
+            (Vec3::X, true),
+            (Vec3::Z, true),
+            (Vec3::X, false),
+            (Vec3::Y, false),
+        ] {
+            let h = 1e-3;
+            let fd = (carried(y + h * e, area).ln() - carried(y - h * e, area).ln()) / (2.0 * h);
+            let rate = moved_light_rate(x, n, y, if area { n_l } else { Vec3::ZERO }, e);
+            assert!(
+                (rate - fd).abs() < 1e-3 * fd.abs().max(1e-2),
+                "{e} {area}: {rate} vs {fd}"
+            );
+        }
+    }
 }

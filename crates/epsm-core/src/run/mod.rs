@@ -5,17 +5,38 @@
 //! Every random stream is keyed by the problem's seed and the iteration, so
 //! a run resumed from a checkpoint follows the same θ trajectory as one that
 //! was never interrupted.
+//!
+//! ## Library use
+//! Build a [`Problem`] (from a file with [`crate::load_problem`], or in code
+//! with [`Problem::new`] and [`crate::ParamSpec`]), then step an
+//! [`Optimization`]: each [`Optimization::step`] returns the iteration's
+//! [`Row`] (loss, image RMSE, parameter error, θ, path counts, timings);
+//! [`Optimization::gradient`] gives `dL/dθ` at the current θ without
+//! stepping; [`Optimization::checkpoint`] / [`Optimization::restore`] save
+//! and resume.
+//!
+//! ```no_run
+//! use epsm_core::{Optimization, ParamSpec, Problem};
+//! let scene = epsm_render::scene::load_parts("scenes/layout.toml".as_ref())?;
+//! let params = vec![ParamSpec::new("table.translate.x", -0.5, 0.04).with_true(0.0)];
+//! let mut opt = Optimization::new(Problem::new(scene, params))?;
+//! while !opt.is_done() {
+//!     let row = opt.step()?;
+//!     println!("{} {:.3e} {:?}", row.iteration, row.loss, row.theta);
+//! }
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 
+mod checkpoint;
 mod error;
 
-use std::path::Path;
 use std::time::Instant;
 
 use epsm_render::record::PathRecord;
 use epsm_render::tracer::{RenderOptions, render, render_recorded};
 use epsm_render::{Image, Scene};
-use serde::{Deserialize, Serialize};
 
+pub use checkpoint::Checkpoint;
 pub use error::{OptResult, OptimizeError};
 
 use crate::backprop::{PassInput, PassStats, backprop, record_level};
@@ -24,8 +45,8 @@ use crate::loss::{LossEval, evaluate, resample, rmse};
 use crate::optim::{Adam, AdamSettings};
 use crate::params::ParamTable;
 use crate::problem::{Problem, Target};
-use crate::report::{Row, Timings, param_error, write_atomic};
-use crate::schedule::{Method, Schedule};
+use crate::report::{Row, Timings, param_error};
+use crate::schedule::Schedule;
 
 /// A scene and its parameter table (one per resolution).
 #[derive(Clone, Debug)]
@@ -53,23 +74,6 @@ impl View {
         }
         self.table.apply(&mut self.scene);
     }
-}
-
-/// What a checkpoint holds: enough to continue a run exactly.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Checkpoint {
-    /// The next iteration to run.
-    pub iteration: u32,
-    /// θ before that iteration.
-    pub theta: Vec<f64>,
-    /// Adam's state.
-    pub adam: Adam,
-    /// Wall seconds spent so far.
-    pub wall_s: f64,
-    /// The method.
-    pub method: Method,
-    /// The rows so far.
-    pub rows: Vec<Row>,
 }
 
 /// The gradient at the current θ and what produced it.
@@ -321,58 +325,6 @@ impl Optimization {
         self.iteration += 1;
         self.rows.push(row.clone());
         Ok(row)
-    }
-
-    /// The state needed to resume.
-    pub fn checkpoint(&self) -> Checkpoint {
-        Checkpoint {
-            iteration: self.iteration,
-            theta: self.theta.clone(),
-            adam: self.adam.clone(),
-            wall_s: self.wall_before + self.started.elapsed().as_secs_f64(),
-            method: self.schedule.method,
-            rows: self.rows.clone(),
-        }
-    }
-
-    /// Continues from `c` (which must come from the same problem and method).
-    pub fn restore(&mut self, c: Checkpoint) -> OptResult<()> {
-        if c.theta.len() != self.theta.len() || c.method != self.schedule.method {
-            return Err(OptimizeError::Invalid(format!(
-                "checkpoint has {} parameters and method {}; the problem has {} and {}",
-                c.theta.len(),
-                c.method.name(),
-                self.theta.len(),
-                self.schedule.method.name()
-            )));
-        }
-        self.iteration = c.iteration;
-        self.adam = c.adam;
-        self.wall_before = c.wall_s;
-        self.started = Instant::now();
-        self.rows = c.rows;
-        self.set_theta(&c.theta);
-        Ok(())
-    }
-
-    /// Writes the checkpoint to `path` (JSON, atomically).
-    pub fn save_checkpoint(&self, path: &Path) -> OptResult<()> {
-        let json =
-            serde_json::to_vec_pretty(&self.checkpoint()).map_err(|e| OptimizeError::File {
-                path: path.to_owned(),
-                message: e.to_string(),
-            })?;
-        write_atomic(path, &json)
-    }
-
-    /// Reads a checkpoint written by [`Optimization::save_checkpoint`].
-    pub fn load_checkpoint(path: &Path) -> OptResult<Checkpoint> {
-        let err = |message: String| OptimizeError::File {
-            path: path.to_owned(),
-            message,
-        };
-        let text = std::fs::read_to_string(path).map_err(|e| err(e.to_string()))?;
-        serde_json::from_str(&text).map_err(|e| err(e.to_string()))
     }
 }
 
