@@ -23,6 +23,12 @@ struct Cli {
 enum Command {
     /// Render a scene file to an EXR (linear) or PNG (sRGB) image.
     Render(cmd::render::RenderArgs),
+    /// Optimize scene parameters to match a target (docs/problem-format.md).
+    Optimize(cmd::optimize::OptimizeArgs),
+    /// Run several methods on one problem and plot error against time.
+    Compare(cmd::compare::CompareArgs),
+    /// Write gradient images (motion field, dI/dθ, OT matching) of one parameter.
+    Grad(cmd::grad::GradArgs),
     /// Validate manifold derivatives of traced paths against Newton re-solves.
     Check(cmd::check::CheckArgs),
     /// Measure performance (renderer, BVH, matching) and print the numbers.
@@ -34,6 +40,9 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Render(args) => cmd::render::run(args),
+        Command::Optimize(args) => cmd::optimize::run(args),
+        Command::Compare(args) => cmd::compare::run(args),
+        Command::Grad(args) => cmd::grad::run(args),
         Command::Check(args) => cmd::check::run(args),
         Command::Bench(b) => cmd::bench::run(b),
     };

@@ -78,16 +78,25 @@
 //! # }
 //! ```
 
+pub mod backprop;
 pub mod check;
+pub mod colour;
 pub mod constraints;
 pub mod drops;
 pub mod error;
+pub mod field;
 pub mod frame;
+pub mod loss;
 pub mod motion;
 pub mod newton;
+pub mod optim;
 pub mod params;
 pub mod paths;
 pub mod pixel;
+pub mod problem;
+pub mod report;
+pub mod run;
+pub mod schedule;
 pub mod solve;
 #[cfg(test)]
 mod testing;
@@ -98,4 +107,7 @@ pub use error::{Error, Result};
 pub use motion::Motion;
 pub use params::ParamTable;
 pub use paths::{DiffPath, PathKind, classify};
+pub use problem::{ParamSpec, Problem, load_problem};
+pub use run::{Checkpoint, OptResult, Optimization, OptimizeError};
+pub use schedule::Method;
 pub use solve::{Gradient, PixelJacobian, SolveSettings, solve_adjoint, solve_forward};

@@ -6,6 +6,10 @@ pub mod bench_ot;
 pub mod bench_rays;
 pub mod bench_render;
 pub mod check;
+pub mod compare;
+pub mod grad;
+pub mod optimize;
+pub mod plots;
 pub mod render;
 
 /// Runs `f` on a rayon pool of `threads` threads (all cores when `None`).

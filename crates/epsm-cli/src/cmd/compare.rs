@@ -1,0 +1,84 @@
+//! `epsm compare`: run several methods on one problem with the same
+//! iteration count and seed, and draw their error-versus-time curves in one
+//! plot (`compare.png`) with `compare.csv` beside it; each method's own run
+//! folder (`<out>/<method>/`) holds its full report.
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+use epsm_core::load_problem;
+use epsm_core::report::write_atomic;
+
+use super::optimize::{Summary, apply_overrides, optimize, panels};
+use super::plots::plot_panels;
+
+/// Arguments of `epsm compare`.
+#[derive(clap::Args, Debug)]
+pub struct CompareArgs {
+    /// The problem file (TOML).
+    pub problem: PathBuf,
+    /// Comma-separated methods (epsm, drot, l2).
+    #[arg(long, default_value = "epsm,drot,l2", value_delimiter = ',')]
+    pub methods: Vec<String>,
+    /// Output folder (default: the problem's `output.dir` + `-compare`).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Iterations of every method (default: the problem's).
+    #[arg(long)]
+    pub iterations: Option<u32>,
+    /// Seed (default: the problem's).
+    #[arg(long)]
+    pub seed: Option<u32>,
+    /// Also print the results as Markdown table rows (for docs/results.md).
+    #[arg(long)]
+    pub markdown: bool,
+}
+
+/// Runs `epsm compare`.
+pub fn run(args: &CompareArgs) -> anyhow::Result<()> {
+    let base = load_problem(&args.problem)?;
+    let out = args.out.clone().unwrap_or_else(|| {
+        let mut d = base.out_dir.clone().into_os_string();
+        d.push("-compare");
+        d.into()
+    });
+    let name = args
+        .problem
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or("problem")
+        .to_owned();
+    let mut runs: Vec<(String, Summary)> = Vec::new();
+    for method in &args.methods {
+        let mut p = base.clone();
+        apply_overrides(&mut p, args.iterations, Some(method), args.seed)?;
+        eprintln!("{name}: running {method}");
+        let s = optimize(p, &out.join(method), false)?;
+        runs.push((method.clone(), s));
+    }
+    let mut csv = String::from("problem,method,param_error,image_rmse,iterations,wall_s\n");
+    let mut md = String::new();
+    for (m, s) in &runs {
+        let pe = s.param_error.map(|e| format!("{e:.5}")).unwrap_or_default();
+        let _ = writeln!(
+            csv,
+            "{name},{m},{pe},{:.5},{},{:.1}",
+            s.image_rmse, s.iterations, s.wall_s
+        );
+        let pe = if pe.is_empty() { "n/a".into() } else { pe };
+        let _ = writeln!(
+            md,
+            "| {name} | {m} | {pe} | {:.5} | {} | {:.1} |",
+            s.image_rmse, s.iterations, s.wall_s
+        );
+    }
+    write_atomic(&out.join("compare.csv"), csv.as_bytes())?;
+    let refs: Vec<(String, &Summary)> = runs.iter().map(|(m, s)| (m.clone(), s)).collect();
+    plot_panels(&out.join("compare.png"), &panels(&refs))?;
+    if args.markdown {
+        print!("{md}");
+    } else {
+        print!("{csv}");
+    }
+    Ok(())
+}

@@ -1,0 +1,208 @@
+//! `epsm optimize`: run one optimization problem and write its report.
+//!
+//! Output folder: `run.csv` (one row per iteration, rewritten atomically each
+//! iteration), `target`, `initial` and `final` images (`.png` sRGB and
+//! `.exr` linear), `report.png` (image RMSE and parameter error against
+//! wall-clock seconds), `checkpoint.json` every `output.checkpoint_every`
+//! iterations and at the end (`--resume DIR` continues from it).
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+use epsm_core::report::{csv, param_error, write_atomic};
+use epsm_core::{Method, Optimization, Problem, load_problem};
+use epsm_render::Image;
+use epsm_render::image_io::write_image;
+
+use super::plots::{Panel, Series, plot_panels};
+use crate::progress;
+
+/// Arguments of `epsm optimize`.
+#[derive(clap::Args, Debug)]
+pub struct OptimizeArgs {
+    /// The problem file (TOML, see docs/problem-format.md).
+    pub problem: PathBuf,
+    /// Output folder (default: the problem's `output.dir`).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Iterations (default: the problem's `optimizer.iterations`).
+    #[arg(long)]
+    pub iterations: Option<u32>,
+    /// Method: epsm, drot or l2 (default: the problem's `optimizer.method`).
+    #[arg(long)]
+    pub method: Option<String>,
+    /// Seed of the iterations' random streams (default: `optimizer.seed`).
+    #[arg(long)]
+    pub seed: Option<u32>,
+    /// Continue the run whose output folder is DIR from its checkpoint.
+    #[arg(long, value_name = "DIR")]
+    pub resume: Option<PathBuf>,
+}
+
+/// How a run ended.
+pub struct Summary {
+    /// Parameter error at the final θ (when true values are known).
+    pub param_error: Option<f64>,
+    /// RMSE of the final render against the target.
+    pub image_rmse: f64,
+    /// Iterations run.
+    pub iterations: u32,
+    /// Wall seconds of the optimization.
+    pub wall_s: f64,
+    /// One point per iteration.
+    pub curve: Vec<CurvePoint>,
+}
+
+/// One iteration's errors, for plots.
+pub struct CurvePoint {
+    /// Wall seconds since the start.
+    pub wall_s: f64,
+    /// Image RMSE against the target.
+    pub image_rmse: f64,
+    /// Parameter error, when known.
+    pub param_error: Option<f64>,
+}
+
+/// Applies the command-line overrides to a loaded problem.
+pub fn apply_overrides(
+    problem: &mut Problem,
+    iterations: Option<u32>,
+    method: Option<&str>,
+    seed: Option<u32>,
+) -> anyhow::Result<()> {
+    if let Some(n) = iterations {
+        anyhow::ensure!(n >= 1, "--iterations must be at least 1");
+        problem.optimizer.iterations = n;
+    }
+    if let Some(m) = method {
+        problem.optimizer.method = Method::parse(m)
+            .with_context(|| format!("--method `{m}`: expected epsm, drot or l2"))?;
+    }
+    if let Some(s) = seed {
+        problem.optimizer.seed = s;
+    }
+    Ok(())
+}
+
+/// Runs `epsm optimize`.
+pub fn run(args: &OptimizeArgs) -> anyhow::Result<()> {
+    let mut problem = load_problem(&args.problem)?;
+    apply_overrides(
+        &mut problem,
+        args.iterations,
+        args.method.as_deref(),
+        args.seed,
+    )?;
+    let out = args
+        .resume
+        .clone()
+        .or_else(|| args.out.clone())
+        .unwrap_or_else(|| problem.out_dir.clone());
+    let s = optimize(problem, &out, args.resume.is_some())?;
+    println!(
+        "{}: {} iterations in {:.1} s, image RMSE {:.4}, parameter error {} -> {}",
+        args.problem.display(),
+        s.iterations,
+        s.wall_s,
+        s.image_rmse,
+        s.param_error.map_or("n/a".into(), |e| format!("{e:.4}")),
+        out.display()
+    );
+    Ok(())
+}
+
+fn save(out: &Path, name: &str, img: &Image) -> anyhow::Result<()> {
+    for ext in ["png", "exr"] {
+        let p = out.join(format!("{name}.{ext}"));
+        write_image(&p, img).with_context(|| format!("writing {}", p.display()))?;
+    }
+    Ok(())
+}
+
+/// Runs (or resumes) `problem` writing into `out`.
+pub fn optimize(problem: Problem, out: &Path, resume: bool) -> anyhow::Result<Summary> {
+    let every = problem.checkpoint_every;
+    let preview_spp = problem.passes.spp_primal.max(16);
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let mut opt = Optimization::new(problem)?;
+    let checkpoint = out.join("checkpoint.json");
+    if resume {
+        let c = Optimization::load_checkpoint(&checkpoint)?;
+        opt.restore(c)?;
+    } else {
+        save(out, "target", opt.target())?;
+        save(out, "initial", &opt.render(preview_spp))?;
+    }
+    let keys = opt.keys();
+    let total = u64::from(opt.problem().optimizer.iterations);
+    let bar = progress::bar(total, "iterations");
+    bar.set_position(u64::from(opt.iteration()));
+    while !opt.is_done() {
+        let row = opt.step()?;
+        bar.set_message(format!("loss {:.3e}", row.loss));
+        bar.inc(1);
+        write_atomic(&out.join("run.csv"), csv(&keys, opt.rows()).as_bytes())?;
+        if every > 0 && opt.iteration() % every == 0 {
+            opt.save_checkpoint(&checkpoint)?;
+        }
+    }
+    bar.finish_and_clear();
+    opt.save_checkpoint(&checkpoint)?;
+    let final_image = opt.render(preview_spp);
+    save(out, "final", &final_image)?;
+    let truth: Vec<Option<f64>> = opt.problem().params.iter().map(|p| p.true_value).collect();
+    let curve = opt
+        .rows()
+        .iter()
+        .map(|r| CurvePoint {
+            wall_s: r.wall_s,
+            image_rmse: r.image_rmse,
+            param_error: r.param_error,
+        })
+        .collect();
+    let summary = Summary {
+        param_error: param_error(opt.theta(), &truth),
+        image_rmse: epsm_core::loss::rmse(&final_image, opt.target()),
+        iterations: opt.iteration(),
+        wall_s: opt.checkpoint().wall_s,
+        curve,
+    };
+    let method = opt.problem().optimizer.method.name();
+    plot_panels(
+        &out.join("report.png"),
+        &panels(&[(method.to_owned(), &summary)]),
+    )?;
+    Ok(summary)
+}
+
+/// The two panels of a report: image RMSE and parameter error against time.
+pub fn panels(runs: &[(String, &Summary)]) -> Vec<Panel> {
+    let series = |f: &dyn Fn(&CurvePoint) -> Option<f64>| {
+        runs.iter()
+            .map(|(name, s)| Series {
+                name: name.clone(),
+                points: s
+                    .curve
+                    .iter()
+                    .filter_map(|c| f(c).map(|y| (c.wall_s, y)))
+                    .collect(),
+            })
+            .collect()
+    };
+    let mut out = vec![Panel {
+        title: "image RMSE".into(),
+        y_label: "RMSE (linear RGB)".into(),
+        series: series(&|c| Some(c.image_rmse)),
+    }];
+    if runs
+        .iter()
+        .any(|(_, s)| s.curve.iter().any(|c| c.param_error.is_some()))
+    {
+        out.push(Panel {
+            title: "parameter error".into(),
+            y_label: "RMS of θ − θ_true".into(),
+            series: series(&|c| c.param_error),
+        });
+    }
+    out
+}

@@ -1,0 +1,83 @@
+//! `epsm optimize` end to end on a tiny problem: the report files exist and
+//! parse, and `--resume` continues from the checkpoint.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn epsm(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_epsm"))
+        .args(args)
+        .output()
+        .expect("epsm runs")
+}
+
+fn tiny() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/tiny.toml")
+}
+
+#[test]
+fn optimize_writes_parseable_reports_and_resumes() {
+    let dir = std::env::temp_dir().join(format!("epsm-optimize-cli-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = dir.to_str().expect("utf-8 path");
+    let problem = tiny();
+    let run = epsm(&["optimize", problem.to_str().expect("utf-8"), "--out", out]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    for f in [
+        "run.csv",
+        "report.png",
+        "checkpoint.json",
+        "target.png",
+        "target.exr",
+        "initial.png",
+        "initial.exr",
+        "final.png",
+        "final.exr",
+    ] {
+        assert!(dir.join(f).is_file(), "{f} missing");
+    }
+    let csv = std::fs::read_to_string(dir.join("run.csv")).expect("run.csv");
+    let lines: Vec<&str> = csv.lines().collect();
+    assert!(lines[0].starts_with("iteration,wall_s,loss,image_rmse,param_error,box.translate.x,"));
+    assert_eq!(lines.len(), 4, "header and 3 rows");
+    let columns = lines[0].split(',').count();
+    for (i, line) in lines[1..].iter().enumerate() {
+        let cells: Vec<&str> = line.split(',').collect();
+        assert_eq!(cells.len(), columns);
+        assert_eq!(cells[0].parse::<u32>().expect("iteration"), i as u32);
+        for c in &cells[1..6] {
+            let v: f64 = c.parse().expect("number");
+            assert!(v.is_finite());
+        }
+    }
+    let checkpoint: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.join("checkpoint.json")).expect("checkpoint"),
+    )
+    .expect("json");
+    assert_eq!(checkpoint["iteration"], 3);
+
+    let resumed = epsm(&[
+        "optimize",
+        problem.to_str().expect("utf-8"),
+        "--resume",
+        out,
+        "--iterations",
+        "5",
+    ]);
+    assert!(
+        resumed.status.success(),
+        "{}",
+        String::from_utf8_lossy(&resumed.stderr)
+    );
+    let csv = std::fs::read_to_string(dir.join("run.csv")).expect("run.csv");
+    assert_eq!(csv.lines().count(), 6, "rows 0..5 after resuming");
+
+    let bad = epsm(&["optimize", "does-not-exist.toml"]);
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("does-not-exist.toml"));
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1,0 +1,236 @@
+//! The gradient pass of one iteration (DESIGN §3): from recorded paths and
+//! the loss's per-pixel gradients to `dL/dθ`.
+//!
+//! For every recorded path sample of a pixel with a non-zero gradient:
+//! - **colour**: `dL/dθ += g_rgb · dc/dθ / spp` ([`ColourModel`]);
+//! - **position**: the record is classified into differentiable paths
+//!   ([`classify`]); the pixel's `g_xy` is shared among them in proportion
+//!   to each path's share of the pixel's luminance (a shadow counts with the
+//!   luminance its blocked connection removes), and each path adds
+//!   `(w·g_xy)·dp/dθ` by one adjoint manifold solve ([`solve_adjoint`]).
+//!
+//! Paths touching no driven object are never built, and when every
+//! parameter is a material or emitter value no manifold work is done at
+//! all. Work runs on rayon over records; per-record results are reduced in
+//! record order, so the gradient is bit-identical for a seed whatever the
+//! thread count. Every path is counted: traced, solved, skipped, dropped by
+//! reason, and by kind.
+
+use epsm_render::Scene;
+use epsm_render::record::{PathRecord, RecordLevel};
+use glam::{DVec2, Vec3};
+use rayon::prelude::*;
+
+use crate::colour::ColourModel;
+use crate::drops::{DropCounts, Dropped};
+use crate::loss::LossEval;
+use crate::params::{ParamTable, Target};
+use crate::paths::{Classified, DiffPath, PathKind, classify};
+use crate::schedule::PathUse;
+use crate::solve::{SolveSettings, solve_adjoint};
+
+/// Path counts of one gradient pass.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PassStats {
+    /// Path samples traced (records).
+    pub traced: u64,
+    /// Differentiable paths solved.
+    pub solved: u64,
+    /// Records skipped: zero pixel gradient, or nothing driven on them.
+    pub skipped: u64,
+    /// Paths dropped (or not buildable), by reason.
+    pub dropped: DropCounts,
+    /// Differentiable paths seen, per [`PathKind`] (index = `kind as usize`).
+    pub kinds: [u64; PathKind::ALL.len()],
+}
+
+impl PassStats {
+    fn merge(&mut self, o: &PassStats) {
+        self.traced += o.traced;
+        self.solved += o.solved;
+        self.skipped += o.skipped;
+        self.dropped.merge(&o.dropped);
+        for (a, b) in self.kinds.iter_mut().zip(o.kinds) {
+            *a += b;
+        }
+    }
+
+    /// Names of the path kinds seen, `+`-separated (`primary+caustic`).
+    pub fn kinds_seen(&self) -> String {
+        let names: Vec<&str> = PathKind::ALL
+            .iter()
+            .filter(|k| self.kinds[**k as usize] > 0)
+            .map(|k| k.name())
+            .collect();
+        names.join("+")
+    }
+}
+
+/// Whether any parameter moves geometry (objects, lights, camera).
+pub fn has_geometry(table: &ParamTable) -> bool {
+    table.params().iter().any(|p| {
+        !matches!(
+            p.target,
+            Target::Albedo { .. }
+                | Target::Alpha { .. }
+                | Target::Ior { .. }
+                | Target::Emission { .. }
+        )
+    })
+}
+
+/// The least record level the pass needs: primary vertices for primary
+/// paths, the first diffuse vertex for chains and shadows, everything for
+/// caustics (scenes with specular or glossy materials) and colour terms.
+pub fn record_level(
+    table: &ParamTable,
+    scene: &Scene,
+    colour: &ColourModel,
+    use_: PathUse,
+) -> RecordLevel {
+    let caustics = scene
+        .materials()
+        .iter()
+        .any(|m| !matches!(m.bsdf, epsm_render::materials::Bsdf::Diffuse(_)));
+    match use_ {
+        _ if !colour.is_empty() => RecordLevel::Full,
+        PathUse::ColourOnly | PathUse::PrimaryOnly => RecordLevel::Primary,
+        PathUse::All if !has_geometry(table) => RecordLevel::Primary,
+        PathUse::All if caustics => RecordLevel::Full,
+        PathUse::All => RecordLevel::FirstDiffuse,
+    }
+}
+
+/// Everything the pass reads.
+pub struct PassInput<'a> {
+    /// The scene at θ, at the match resolution.
+    pub scene: &'a Scene,
+    /// The parameter table of `scene`, at θ.
+    pub table: &'a ParamTable,
+    /// Colour-derivative model at θ.
+    pub colour: &'a ColourModel,
+    /// Per-pixel loss gradients at the match resolution.
+    pub loss: &'a LossEval,
+    /// Samples per pixel of the records.
+    pub spp: u32,
+    /// Which paths give position gradients.
+    pub use_: PathUse,
+}
+
+struct RecordOut {
+    entries: Vec<(usize, f64)>,
+    stats: PassStats,
+}
+
+/// `dL/dθ` (index order of the table) and the pass's counts.
+pub fn backprop(input: &PassInput<'_>, records: &[PathRecord]) -> (Vec<f64>, PassStats) {
+    let n = input.table.len();
+    let motion = input.table.motion(&input.table.values());
+    let settings = SolveSettings::for_radius(input.scene.radius());
+    let positions = input.use_ != PathUse::ColourOnly && has_geometry(input.table);
+    let pixel_of = |r: &PathRecord| (r.pixel.y * input.loss.width + r.pixel.x) as usize;
+    // Classify, then sum each pixel's luminance mass (its samples' radiance
+    // plus the radiance its shadows remove).
+    let classified: Vec<Option<Classified>> = records
+        .par_iter()
+        .map(|r| {
+            let g = input
+                .loss
+                .g_xy
+                .get(pixel_of(r))
+                .copied()
+                .unwrap_or(DVec2::ZERO);
+            (positions && g != DVec2::ZERO).then(|| {
+                let mut c = classify(r, input.scene, &motion, &settings);
+                if input.use_ == PathUse::PrimaryOnly {
+                    c.paths.retain(|p| p.kind == PathKind::Primary);
+                }
+                c
+            })
+        })
+        .collect();
+    let mut mass = vec![0.0f64; input.loss.g_xy.len()];
+    for (r, c) in records.iter().zip(&classified) {
+        if let Some(m) = mass.get_mut(pixel_of(r)) {
+            *m += f64::from(luminance(r.radiance).abs());
+            let shadows = c
+                .iter()
+                .flat_map(|c| &c.paths)
+                .filter(|p| p.kind == PathKind::Shadow);
+            *m += shadows
+                .map(|p| f64::from(luminance(p.contribution).abs()))
+                .sum::<f64>();
+        }
+    }
+    let outs: Vec<RecordOut> = records
+        .par_iter()
+        .zip(&classified)
+        .map(|(r, c)| {
+            let px = pixel_of(r);
+            let mut out = RecordOut {
+                entries: Vec::new(),
+                stats: PassStats {
+                    traced: 1,
+                    ..Default::default()
+                },
+            };
+            let g_rgb = input.loss.g_rgb.get(px).copied().unwrap_or(Vec3::ZERO);
+            if g_rgb != Vec3::ZERO {
+                let scale = 1.0 / input.spp as f32;
+                for (k, dc) in input.colour.gradient(r, input.scene) {
+                    out.entries.push((k, f64::from(g_rgb.dot(dc) * scale)));
+                }
+            }
+            match (c, mass.get(px)) {
+                (Some(c), Some(&m)) if m > 0.0 && !c.paths.is_empty() => {
+                    out.stats.dropped.merge(&c.skipped);
+                    let g = input.loss.g_xy[px] / m;
+                    for path in &c.paths {
+                        solve_one(path, g, &motion, &settings, &mut out);
+                    }
+                }
+                _ if out.entries.is_empty() => out.stats.skipped = 1,
+                _ => {}
+            }
+            out
+        })
+        .collect();
+    let mut grad = vec![0.0; n];
+    let mut stats = PassStats::default();
+    for o in &outs {
+        for &(k, v) in &o.entries {
+            if let Some(x) = grad.get_mut(k) {
+                *x += v;
+            }
+        }
+        stats.merge(&o.stats);
+    }
+    (grad, stats)
+}
+
+/// One adjoint solve with `g_xy` pre-divided by the pixel's mass.
+fn solve_one(
+    path: &DiffPath,
+    g: DVec2,
+    motion: &crate::Motion,
+    settings: &SolveSettings,
+    out: &mut RecordOut,
+) {
+    out.stats.kinds[path.kind as usize] += 1;
+    let w = f64::from(luminance(path.contribution).abs());
+    if w == 0.0 {
+        return;
+    }
+    match solve_adjoint(path, g * w, motion, settings) {
+        Ok(gr) => {
+            out.stats.solved += 1;
+            out.entries.extend(gr.entries);
+        }
+        Err(Dropped(reason)) => out.stats.dropped.add(reason),
+    }
+}
+
+/// Rec. 709 luminance of a linear colour.
+pub fn luminance(c: Vec3) -> f32 {
+    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
+}

@@ -1,0 +1,197 @@
+//! Optimization problems (DESIGN §4): a scene, the parameters to recover,
+//! the target, the loss, the optimizer and the output settings, loaded from
+//! a TOML problem file ([`desc`], `docs/problem-format.md`) or built in code.
+//!
+//! Every malformed field gives a located [`SceneError`] (file, line, dotted
+//! field) through [`OptimizeError::Render`]; nothing panics.
+//!
+//! ```toml
+//! scene_file = "../layout.toml"
+//!
+//! [[parameters]]
+//! key = "table.translate.x"
+//! initial = 0.6
+//! true = 0.0
+//!
+//! [loss]
+//! kind = "ot_exact"
+//! match_resolution = [64, 64]
+//! ```
+
+pub mod desc;
+mod validate;
+
+use std::path::{Path, PathBuf};
+
+use epsm_render::Image;
+use epsm_render::scene::SceneParts;
+
+use crate::loss::LossKind;
+use crate::run::OptResult;
+use crate::schedule::Method;
+pub use desc::ProblemDesc;
+
+/// One optimized parameter.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ParamSpec {
+    /// Parameter key (see [`crate::params`]).
+    pub key: String,
+    /// Starting value (user units); `None`: the scene file's value.
+    pub initial: Option<f64>,
+    /// The true value when known.
+    pub true_value: Option<f64>,
+    /// `[lo, hi]` (`±f64::MAX` when unbounded).
+    pub bounds: [f64; 2],
+    /// Learning rate (user units per step).
+    pub lr: f64,
+}
+
+impl ParamSpec {
+    /// An unbounded parameter starting at `initial` with learning rate `lr`.
+    pub fn new(key: &str, initial: f64, lr: f64) -> Self {
+        Self {
+            key: key.to_owned(),
+            initial: Some(initial),
+            true_value: None,
+            bounds: [-f64::MAX, f64::MAX],
+            lr,
+        }
+    }
+
+    /// The same parameter with a known true value.
+    pub fn with_true(mut self, value: f64) -> Self {
+        self.true_value = Some(value);
+        self
+    }
+}
+
+/// What the render is compared with.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Target {
+    /// A given image at the scene camera's resolution (linear RGB).
+    Image(Image),
+    /// The scene rendered at the true parameter values.
+    Render {
+        /// Samples per pixel.
+        spp: u32,
+        /// Seed.
+        seed: u32,
+    },
+}
+
+/// The loss settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LossSettings {
+    /// The loss used before the hybrid switch.
+    pub kind: LossKind,
+    /// Weight λ of screen position against colour.
+    pub lambda: f64,
+    /// `[width, height]` of the matching and the gradient pass.
+    pub match_resolution: [u32; 2],
+}
+
+/// The optimizer and schedule settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OptimizerSettings {
+    /// The method.
+    pub method: Method,
+    /// Iterations.
+    pub iterations: u32,
+    /// Multiplicative learning-rate decay per iteration.
+    pub decay: f64,
+    /// Adam β₁.
+    pub beta1: f64,
+    /// Adam β₂.
+    pub beta2: f64,
+    /// Fraction of iterations run with L2 at the end.
+    pub l2_fraction: f64,
+    /// Seed of the iterations' random streams.
+    pub seed: u32,
+}
+
+/// Samples per pixel of an iteration's two renders.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Passes {
+    /// Primal render at the scene resolution (image RMSE in the report).
+    pub spp_primal: u32,
+    /// Gradient pass at the match resolution.
+    pub spp_grad: u32,
+}
+
+/// A complete optimization problem.
+#[derive(Clone, Debug)]
+pub struct Problem {
+    /// The scene at its file placement, at the render resolution.
+    pub scene: SceneParts,
+    /// The optimized parameters.
+    pub params: Vec<ParamSpec>,
+    /// The target.
+    pub target: Target,
+    /// The loss.
+    pub loss: LossSettings,
+    /// The optimizer.
+    pub optimizer: OptimizerSettings,
+    /// The renders of an iteration.
+    pub passes: Passes,
+    /// Default output folder.
+    pub out_dir: PathBuf,
+    /// Checkpoint interval in iterations (0: never).
+    pub checkpoint_every: u32,
+}
+
+impl Problem {
+    /// A problem over `scene` with default settings (OT exact at 64², 60
+    /// iterations of `epsm`, target rendered at the true values with 256 spp).
+    pub fn new(scene: SceneParts, params: Vec<ParamSpec>) -> Self {
+        let (target, loss) = (desc::TargetDesc::default(), desc::LossDesc::default());
+        let (opt, render) = (
+            desc::OptimizerDesc::default(),
+            desc::RenderPassDesc::default(),
+        );
+        let output = desc::OutputDesc::default();
+        Self {
+            scene,
+            params,
+            target: Target::Render {
+                spp: target.spp,
+                seed: target.seed,
+            },
+            loss: LossSettings {
+                kind: LossKind::OtExact,
+                lambda: loss.lambda,
+                match_resolution: loss.match_resolution,
+            },
+            optimizer: OptimizerSettings {
+                method: Method::Epsm,
+                iterations: opt.iterations,
+                decay: opt.decay,
+                beta1: opt.beta1,
+                beta2: opt.beta2,
+                l2_fraction: opt.l2_fraction,
+                seed: opt.seed,
+            },
+            passes: Passes {
+                spp_primal: render.spp_primal,
+                spp_grad: render.spp_grad,
+            },
+            out_dir: PathBuf::from(output.dir),
+            checkpoint_every: output.checkpoint_every,
+        }
+    }
+}
+
+/// Loads and checks the problem file at `path`.
+pub fn load_problem(path: &Path) -> OptResult<Problem> {
+    let text = std::fs::read_to_string(path).map_err(|source| epsm_render::Error::Io {
+        path: path.to_owned(),
+        source,
+    })?;
+    problem_from_str(&text, path)
+}
+
+/// Checks the text of a problem file; `file` names it in errors and its
+/// directory resolves relative paths.
+pub fn problem_from_str(text: &str, file: &Path) -> OptResult<Problem> {
+    let (desc, locator) = epsm_render::scene::load::parse_toml::<ProblemDesc>(text, file)?;
+    validate::problem(&desc, file, &locator)
+}

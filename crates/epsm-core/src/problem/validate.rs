@@ -1,0 +1,228 @@
+//! Checks a parsed [`ProblemDesc`] field by field and builds the typed
+//! [`Problem`], with located errors (file, line, dotted field).
+
+use std::path::Path;
+
+use epsm_render::scene::load::{Locator, load_parts, parts_from_desc};
+use epsm_render::{Error, Scene, SceneError};
+
+use super::desc::ProblemDesc;
+use super::{LossSettings, OptimizerSettings, ParamSpec, Passes, Problem, Target};
+use crate::loss::LossKind;
+use crate::params::ParamTable;
+use crate::run::OptResult;
+use crate::schedule::Method;
+
+struct Ctx<'a> {
+    file: &'a Path,
+    locator: &'a Locator,
+}
+
+impl Ctx<'_> {
+    fn err(&self, field: &str, message: impl Into<String>) -> Error {
+        let mut e = SceneError::new(self.file, field, message);
+        e.line = self.locator.line(field);
+        e.into()
+    }
+
+    fn finite(&self, field: &str, v: f64) -> Result<f64, Error> {
+        if v.is_finite() {
+            Ok(v)
+        } else {
+            Err(self.err(field, format!("expected a finite number, found {v}")))
+        }
+    }
+
+    /// `v` in the open-or-closed range described by `ok`, named by `what`.
+    fn check(&self, field: &str, v: f64, ok: bool, what: &str) -> Result<f64, Error> {
+        let v = self.finite(field, v)?;
+        if ok {
+            Ok(v)
+        } else {
+            Err(self.err(field, format!("expected {what}, found {v}")))
+        }
+    }
+
+    fn count(&self, field: &str, v: u32, lo: u32, hi: u32) -> Result<u32, Error> {
+        if (lo..=hi).contains(&v) {
+            Ok(v)
+        } else {
+            Err(self.err(
+                field,
+                format!("expected an integer in [{lo}, {hi}], found {v}"),
+            ))
+        }
+    }
+}
+
+/// Builds the problem of `d`.
+pub(super) fn problem(d: &ProblemDesc, file: &Path, locator: &Locator) -> OptResult<Problem> {
+    let c = Ctx { file, locator };
+    let base = file.parent().unwrap_or(Path::new(""));
+    let scene = match (&d.scene_file, &d.scene) {
+        (Some(path), None) => load_parts(&base.join(path))
+            .map_err(|e| c.err("scene_file", format!("cannot load `{path}`: {e}")))?,
+        (None, Some(desc)) => parts_from_desc(desc, file, locator, "scene")?,
+        _ => {
+            return Err(c
+                .err(
+                    "scene_file",
+                    "give exactly one of `scene_file` and a `[scene]` table",
+                )
+                .into());
+        }
+    };
+    let probe = Scene::new(scene.clone())?;
+    let table = ParamTable::new(&probe);
+    if d.parameters.is_empty() {
+        return Err(c
+            .err("parameters", "expected at least one [[parameters]] entry")
+            .into());
+    }
+    let lr = c.check(
+        "optimizer.lr",
+        d.optimizer.lr,
+        d.optimizer.lr > 0.0,
+        "a positive number",
+    )?;
+    let mut params = Vec::with_capacity(d.parameters.len());
+    for (i, p) in d.parameters.iter().enumerate() {
+        let f = |name: &str| format!("parameters[{i}].{name}");
+        if params.iter().any(|q: &ParamSpec| q.key == p.key) {
+            return Err(c
+                .err(&f("key"), format!("`{}` is listed twice", p.key))
+                .into());
+        }
+        table
+            .clone()
+            .add(&p.key)
+            .map_err(|e| c.err(&f("key"), e.to_string()))?;
+        let bounds = match p.bounds {
+            Some([lo, hi]) => {
+                c.finite(&f("bounds"), lo)?;
+                c.check(
+                    &f("bounds"),
+                    hi,
+                    hi > lo,
+                    "an upper bound above the lower one",
+                )?;
+                [lo, hi]
+            }
+            None => [-f64::MAX, f64::MAX],
+        };
+        let inside = |v: f64| v >= bounds[0] && v <= bounds[1];
+        let initial = p
+            .initial
+            .map(|v| c.check(&f("initial"), v, inside(v), "a value within `bounds`"))
+            .transpose()?;
+        let true_value = p
+            .true_value
+            .map(|v| c.check(&f("true"), v, inside(v), "a value within `bounds`"))
+            .transpose()?;
+        let lr =
+            p.lr.map(|v| c.check(&f("lr"), v, v > 0.0, "a positive number"))
+                .transpose()?
+                .unwrap_or(lr);
+        params.push(ParamSpec {
+            key: p.key.clone(),
+            initial,
+            true_value,
+            bounds,
+            lr,
+        });
+    }
+    let target = match &d.target.image {
+        Some(path) => {
+            let img = epsm_render::image_io::read_image(&base.join(path))
+                .map_err(|e| c.err("target.image", e.to_string()))?;
+            let cam = &scene.camera;
+            if (img.width, img.height) != (cam.width, cam.height) {
+                let msg = format!(
+                    "image is {}x{} but the camera renders {}x{}",
+                    img.width, img.height, cam.width, cam.height
+                );
+                return Err(c.err("target.image", msg).into());
+            }
+            Target::Image(img)
+        }
+        None => {
+            if let Some(i) = params.iter().position(|p| p.true_value.is_none()) {
+                let msg = "without `target.image` every parameter needs a `true` value";
+                return Err(c.err(&format!("parameters[{i}]"), msg).into());
+            }
+            Target::Render {
+                spp: c.count("target.spp", d.target.spp, 1, 1 << 16)?,
+                seed: d.target.seed,
+            }
+        }
+    };
+    let l = &d.loss;
+    let kind = match l.kind.as_str() {
+        "ot_exact" => LossKind::OtExact,
+        "ot_sinkhorn" => LossKind::OtSinkhorn {
+            blur: c.check("loss.blur", l.blur, l.blur > 0.0, "a positive number")?,
+        },
+        "l2" => LossKind::L2,
+        other => {
+            let msg = format!("unknown loss `{other}`; expected ot_exact, ot_sinkhorn or l2");
+            return Err(c.err("loss.kind", msg).into());
+        }
+    };
+    let [mw, mh] = l.match_resolution;
+    c.count("loss.match_resolution", mw.min(mh), 4, 512)?;
+    c.count("loss.match_resolution", mw.max(mh), 4, 512)?;
+    let o = &d.optimizer;
+    let method = Method::parse(&o.method).ok_or_else(|| {
+        c.err(
+            "optimizer.method",
+            format!("unknown method `{}`; expected epsm, drot or l2", o.method),
+        )
+    })?;
+    let unit = |field: &str, v: f64, ok: bool, what: &str| c.check(field, v, ok, what);
+    let optimizer = OptimizerSettings {
+        method,
+        iterations: c.count("optimizer.iterations", o.iterations, 1, 1_000_000)?,
+        decay: unit(
+            "optimizer.decay",
+            o.decay,
+            o.decay > 0.0 && o.decay <= 1.0,
+            "a number in (0, 1]",
+        )?,
+        beta1: unit(
+            "optimizer.beta1",
+            o.beta1,
+            (0.0..1.0).contains(&o.beta1),
+            "a number in [0, 1)",
+        )?,
+        beta2: unit(
+            "optimizer.beta2",
+            o.beta2,
+            (0.0..1.0).contains(&o.beta2),
+            "a number in [0, 1)",
+        )?,
+        l2_fraction: unit(
+            "optimizer.l2_fraction",
+            o.l2_fraction,
+            (0.0..=1.0).contains(&o.l2_fraction),
+            "a number in [0, 1]",
+        )?,
+        seed: o.seed,
+    };
+    Ok(Problem {
+        scene,
+        params,
+        target,
+        loss: LossSettings {
+            kind,
+            lambda: c.check("loss.lambda", l.lambda, l.lambda > 0.0, "a positive number")?,
+            match_resolution: [mw, mh],
+        },
+        optimizer,
+        passes: Passes {
+            spp_primal: c.count("render.spp_primal", d.render.spp_primal, 1, 1 << 16)?,
+            spp_grad: c.count("render.spp_grad", d.render.spp_grad, 1, 1 << 16)?,
+        },
+        out_dir: d.output.dir.clone().into(),
+        checkpoint_every: d.output.checkpoint_every,
+    })
+}

@@ -1,0 +1,32 @@
+//! Typed errors of problem loading and optimization runs.
+
+use std::path::PathBuf;
+
+/// Errors of loading a problem or running an optimization.
+#[derive(Debug, thiserror::Error)]
+pub enum OptimizeError {
+    /// The scene, a problem field, an image or a file write failed in the
+    /// renderer's loaders (located: file, line, field).
+    #[error(transparent)]
+    Render(#[from] epsm_render::Error),
+    /// A parameter key does not fit the scene.
+    #[error(transparent)]
+    Param(#[from] crate::Error),
+    /// The matching failed.
+    #[error("optimal transport: {0}")]
+    Ot(#[from] epsm_ot::OtError),
+    /// Reading or writing a run file failed.
+    #[error("{}: {message}", path.display())]
+    File {
+        /// The file.
+        path: PathBuf,
+        /// What went wrong.
+        message: String,
+    },
+    /// A request that does not fit the problem.
+    #[error("{0}")]
+    Invalid(String),
+}
+
+/// Result with [`OptimizeError`].
+pub type OptResult<T> = std::result::Result<T, OptimizeError>;
