@@ -68,7 +68,13 @@ fn merged_ranges(ranges: &[Range<usize>], list: &[u32]) -> Vec<Range<usize>> {
 }
 
 /// `out_i = −ε log Σ_j exp(log w_j + (g_j − c(x_i, y_j))/ε)` over the listed blocks, with the pair count.
-pub(super) fn softmin(x: &Level, y: &Level, lists: &[Vec<u32>], g: &[f64], eps: f64) -> (Vec<f64>, u64) {
+pub(super) fn softmin(
+    x: &Level,
+    y: &Level,
+    lists: &[Vec<u32>],
+    g: &[f64],
+    eps: f64,
+) -> (Vec<f64>, u64) {
     let inv_eps = (1.0 / eps) as f32;
     let cols = y.cloud.columns();
     let (g32, kappa) = centred(g);
