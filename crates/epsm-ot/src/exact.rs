@@ -106,6 +106,16 @@ impl ExactSettings {
                 reason: "must be finite and non-negative",
             });
         }
+        let auction_ok = self.auction_end > 0.0
+            && self.auction_start >= self.auction_end
+            && self.auction_start.is_finite();
+        if !auction_ok {
+            return Err(OtError::InvalidSetting {
+                key: "exact.auction_start",
+                value: self.auction_start,
+                reason: "need auction_start >= auction_end > 0",
+            });
+        }
         self.warm_start.validate()
     }
 }
@@ -144,6 +154,7 @@ pub(crate) struct SortedAssignment {
     pub u: Vec<f64>,
     /// Column potentials.
     pub v: Vec<f64>,
+    /// Work counters.
     pub stats: SolveStats,
 }
 
@@ -155,7 +166,6 @@ pub(crate) fn solve_sorted(
     settings: &ExactSettings,
 ) -> SortedAssignment {
     let n = x.cloud.len();
-    let (x, y) = (x, y);
 
     // Warm start and candidate graph.
     let dual = solve_dual(x, y, diameter_sq, &settings.warm_start);

@@ -37,6 +37,7 @@
 //! ```
 
 mod dual;
+mod pass;
 
 use crate::blocks::Clustered;
 use crate::cost::{diameter_sq, displacement_gradient};
@@ -198,7 +199,7 @@ fn solve_one(x: &Clustered, y: &Clustered, diam2: f64, settings: &SinkhornSettin
     } else {
         solve_dual(x, y, diam2, settings)
     };
-    let (barycentres, costs, bary_pairs) = dual::barycentres(x, y, &dual);
+    let (barycentres, costs, bary_pairs) = pass::barycentres(x, y, &dual);
     let n = x.cloud.len() as f64;
     let mean = |v: &[f64]| v.iter().sum::<f64>() / n;
     let value = mean(&dual.f) + mean(&dual.g);
