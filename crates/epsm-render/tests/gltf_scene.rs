@@ -168,3 +168,38 @@ fn textures_and_light_ranges_are_skipped_with_warnings() {
         "unnamed light on unnamed node 2"
     );
 }
+
+#[test]
+fn binary_glb_loads_like_the_json_file() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut g = Gltf::default();
+    g.materials.push(pbr(1.0, 0.5));
+    let mesh = g.mesh(&shapes::cube(), 0);
+    g.nodes.push(json!({"name": "box", "mesh": mesh}));
+    g.cameras.push(camera());
+    g.nodes.push(json!({"camera": 0, "translation": [0, 0, 5]}));
+    let gltf = g.write(dir.path(), "b");
+    // The same JSON in a GLB container (its buffer stays the external .bin).
+    let mut json = std::fs::read(&gltf).expect("read back");
+    json.resize(json.len().next_multiple_of(4), b' ');
+    let mut glb = Vec::new();
+    for word in [
+        0x4654_6C67,
+        2,
+        20 + json.len() as u32,
+        json.len() as u32,
+        0x4E4F_534A,
+    ] {
+        glb.extend(u32::to_le_bytes(word));
+    }
+    glb.extend(json);
+    let glb_path = dir.path().join("b.glb");
+    std::fs::write(&glb_path, glb).expect("write glb");
+    let (a, b) = (
+        load_file(&gltf).expect("gltf"),
+        load_file(&glb_path).expect("glb"),
+    );
+    assert_eq!(a.parts.objects[0].name, b.parts.objects[0].name);
+    assert_eq!(a.parts.objects[0].mesh, b.parts.objects[0].mesh);
+    assert_eq!(a.parts.materials, b.parts.materials);
+}

@@ -22,13 +22,13 @@
 //! # a glTF scene loads like a TOML scene: epsm render scene.glb
 //! ```
 
+mod material;
+
 use std::collections::{HashMap, HashSet};
 use std::path::Path;
 use std::sync::Arc;
 
 use glam::{DAffine3, DVec3, Vec3};
-
-mod material;
 
 pub use material::SMOOTH_ALPHA;
 

@@ -60,10 +60,10 @@ pub const IORS: [(&str, f64); 13] = [
 ];
 
 /// Top-level `<bsdf id=…>` definitions by id.
-pub type Definitions<'a> = HashMap<&'a str, &'a Element>;
+pub(crate) type Definitions<'a> = HashMap<&'a str, &'a Element>;
 
 /// The material of `el` (a `<bsdf>` or a `<ref>`), named `name`.
-pub fn material(
+pub(crate) fn material(
     el: &Element,
     name: String,
     defs: &Definitions,
@@ -81,7 +81,7 @@ pub fn material(
 
 /// The `<bsdf>` a `<ref id>` names (or `el` itself), with the ids being
 /// resolved on `stack` to catch cycles.
-pub fn target<'a>(
+pub(crate) fn target<'a>(
     el: &'a Element,
     defs: &Definitions<'a>,
     stack: &mut Vec<String>,

@@ -30,7 +30,7 @@ use crate::scene::load::build::{ImageCache, image};
 use crate::scene::load::check::Ctx;
 
 /// What one top-level emitter becomes.
-pub enum Emitter {
+pub(crate) enum Emitter {
     /// A point light.
     Point(PointLight),
     /// The background.
@@ -38,7 +38,7 @@ pub enum Emitter {
 }
 
 /// The emitter of element `el`; `name` names a point light.
-pub fn emitter(
+pub(crate) fn emitter(
     el: &Element,
     name: String,
     images: &mut ImageCache,

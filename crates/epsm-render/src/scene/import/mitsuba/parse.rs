@@ -33,7 +33,7 @@ pub const MAX_DEPTH: usize = 64;
 
 /// One XML element with its attributes (parameters substituted).
 #[derive(Debug)]
-pub struct Element {
+pub(crate) struct Element {
     /// The tag name.
     pub tag: String,
     /// Dotted field path, used in errors.
@@ -45,7 +45,7 @@ pub struct Element {
 }
 
 /// A parsed document: the root element and the locator of its paths.
-pub struct Document {
+pub(crate) struct Document {
     /// The `<scene>` element.
     pub root: Element,
     /// Lines of element paths.
@@ -54,7 +54,7 @@ pub struct Document {
 
 /// Parses `text`; errors (syntax, undefined `$name`, a root other than
 /// `<scene>`, nesting deeper than [`MAX_DEPTH`]) name `file` and the line.
-pub fn parse(text: &str, file: &Path) -> Result<Document> {
+pub(crate) fn parse(text: &str, file: &Path) -> Result<Document> {
     let doc = roxmltree::Document::parse(text).map_err(|e| {
         SceneError::new(file, "document", format!("malformed XML: {e}"))
             .at_line(e.pos().row as usize)
@@ -215,7 +215,7 @@ impl Element {
 /// Rejects the children of `el` that nobody read: a warning for names in
 /// `skippable` (documented as safe to skip), an error naming the element
 /// and line for anything else.
-pub fn finish(
+pub(crate) fn finish(
     el: &Element,
     ctx: &Ctx,
     skippable: &[&str],

@@ -34,7 +34,7 @@ use crate::scene::load::build::{MAX_DEPTH, View, checked_camera};
 use crate::scene::load::check::Ctx;
 
 /// The camera of `sensor` and the render settings of its sampler and `integrator`.
-pub fn sensor(
+pub(crate) fn sensor(
     sensor: &Element,
     integrator: Option<&Element>,
     ctx: &Ctx,

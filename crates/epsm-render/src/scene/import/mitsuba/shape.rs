@@ -43,7 +43,7 @@ use crate::scene::shapes;
 pub const SPHERE_LEVELS: u32 = 4;
 
 /// A placed shape, before its material is attached.
-pub struct Shape {
+pub(crate) struct Shape {
     /// Object-space mesh (shared between shapes of the same source).
     pub mesh: Arc<Mesh>,
     /// Object → world.
@@ -61,7 +61,7 @@ enum Source {
 
 /// Builds shapes, reading each mesh source once.
 #[derive(Default)]
-pub struct Shapes {
+pub(crate) struct Shapes {
     meshes: HashMap<(Source, bool), Arc<Mesh>>,
 }
 

@@ -25,7 +25,7 @@ use crate::error::Result;
 use crate::scene::load::check::Ctx;
 
 /// The affine map of a `<transform>` element; errors name the child and line.
-pub fn transform(el: &Element, ctx: &Ctx) -> Result<DAffine3> {
+pub(crate) fn transform(el: &Element, ctx: &Ctx) -> Result<DAffine3> {
     if el.tag != "transform" {
         return Err(ctx.err(
             &el.path,

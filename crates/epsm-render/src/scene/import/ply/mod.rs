@@ -131,6 +131,10 @@ fn read_element(e: &Element, r: &mut Reader, mesh: &mut Mesh) -> Result<(), (Str
             e.count
         )));
     }
+    if e.properties.is_empty() && e.name != "vertex" {
+        // Items without properties occupy no bytes: nothing to read, however many.
+        return Ok(());
+    }
     let index = |name: &str| e.properties.iter().position(|p| p.name == name);
     let slots = |names: &[&str]| names.iter().map(|n| index(n)).collect::<Option<Vec<_>>>();
     let is_vertex = e.name == "vertex";
@@ -287,6 +291,16 @@ mod tests {
             .expect_err("two-vertex face")
             .to_string();
         assert!(msg.contains("≥ 3"), "{msg}");
+        let empty = QUAD.replace(
+            "element face 1",
+            "element nothing 4000000000\nelement face 1",
+        );
+        assert_eq!(
+            parse_str(&empty)
+                .expect("property-less elements are empty")
+                .len(),
+            2
+        );
         let msg = parse_str(&QUAD.replace("property float y\n", "property flot y\n"))
             .expect_err("bad type")
             .to_string();
