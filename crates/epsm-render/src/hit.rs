@@ -177,16 +177,18 @@ pub fn surface_point_f64(object: &Object, triangle: u32, b1: f64, b2: f64) -> Su
     let p = b0 * q0 + b1 * q1 + b2 * q2;
     let (dp_db1, dp_db2) = (q1 - q0, q2 - q0);
     let mut ng = dp_db1.cross(dp_db2).try_normalize().unwrap_or(DVec3::Z);
+    // Flat shading: no vertex normals, or normals that cancel at this point.
+    let flat = SurfacePoint64 {
+        p,
+        ng,
+        ns: ng,
+        dp_db1,
+        dp_db2,
+        dns_db1: DVec3::ZERO,
+        dns_db2: DVec3::ZERO,
+    };
     if mesh.normals.is_empty() {
-        return SurfacePoint64 {
-            p,
-            ng,
-            ns: ng,
-            dp_db1,
-            dp_db2,
-            dns_db1: DVec3::ZERO,
-            dns_db2: DVec3::ZERO,
-        };
+        return flat;
     }
     let normal_from_object: DMat3 = object.world_from_object.matrix3.inverse().transpose();
     let [n0, n1, n2] = mesh.indices[triangle as usize]
@@ -194,18 +196,7 @@ pub fn surface_point_f64(object: &Object, triangle: u32, b1: f64, b2: f64) -> Su
     let m = b0 * n0 + b1 * n1 + b2 * n2;
     let len = m.length();
     if !(len > 0.0 && len.is_finite()) {
-        if ng.dot(ng) == 0.0 {
-            ng = DVec3::Z;
-        }
-        return SurfacePoint64 {
-            p,
-            ng,
-            ns: ng,
-            dp_db1,
-            dp_db2,
-            dns_db1: DVec3::ZERO,
-            dns_db2: DVec3::ZERO,
-        };
+        return flat;
     }
     let ns = m / len;
     // d(m/|m|) = (I − ns nsᵀ)·dm / |m|

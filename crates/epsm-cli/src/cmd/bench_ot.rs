@@ -76,14 +76,6 @@ struct Report {
     threads: usize,
 }
 
-/// Peak resident set size in MB, from `VmHWM` in `/proc/self/status` (Linux only).
-fn peak_rss_mb() -> Option<f64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb / 1024.0)
-}
-
 /// Runs the benchmark and prints its report.
 pub fn run(args: &OtBenchArgs) -> anyhow::Result<()> {
     if args.n == 0 {
@@ -119,7 +111,7 @@ pub fn run(args: &OtBenchArgs) -> anyhow::Result<()> {
         iterations: result.stats.iterations,
         pair_evaluations: pairs,
         pair_evals_per_s: (args.solver == OtSolver::Sinkhorn).then(|| pairs as f64 / seconds),
-        peak_rss_mb: peak_rss_mb(),
+        peak_rss_mb: super::peak_rss_mb(),
         threads: rayon::current_num_threads(),
     };
     if args.json {

@@ -65,7 +65,7 @@ pub fn run(args: &RenderBenchArgs) -> anyhow::Result<()> {
             "max_depth": opts.max_depth,
             "load_and_build_s": load_s,
             "runs": results,
-            "peak_rss_mb": peak_rss_mb(),
+            "peak_rss_mb": super::peak_rss_mb(),
         });
         if args.json {
             println!("{report}");
@@ -74,12 +74,4 @@ pub fn run(args: &RenderBenchArgs) -> anyhow::Result<()> {
         }
     }
     Ok(())
-}
-
-/// Peak resident set size of this process in MB (`VmHWM`), when the OS tells.
-pub fn peak_rss_mb() -> Option<f64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb / 1024.0)
 }

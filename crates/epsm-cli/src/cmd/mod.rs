@@ -24,3 +24,12 @@ pub fn with_threads<T: Send>(
     }
     Ok(builder.build()?.install(f))
 }
+
+/// Peak resident set size of this process in MB (`VmHWM` in
+/// `/proc/self/status`); `None` where the OS does not tell.
+pub fn peak_rss_mb() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb / 1024.0)
+}

@@ -81,11 +81,11 @@ fn push_quad(mesh: &mut Mesh, center: Vec3, n: Vec3, u: Vec3, v: Vec3) {
     mesh.indices.push([base, base + 2, base + 3]);
 }
 
-/// Unit sphere: an icosahedron subdivided `levels` times, vertices projected
-/// onto the sphere; normals equal positions.
-pub fn sphere(levels: u32) -> Mesh {
+/// The regular icosahedron with unit-length vertices: 12 positions and 20
+/// counter-clockwise (outward-facing) triangles.
+pub fn icosahedron() -> Mesh {
     let t = (1.0 + 5f32.sqrt()) / 2.0;
-    let mut positions: Vec<Vec3> = [
+    let positions: Vec<Vec3> = [
         (-1.0, t, 0.0),
         (1.0, t, 0.0),
         (-1.0, -t, 0.0),
@@ -102,7 +102,7 @@ pub fn sphere(levels: u32) -> Mesh {
     .into_iter()
     .map(|(x, y, z)| Vec3::new(x, y, z).normalize())
     .collect();
-    let mut indices: Vec<[u32; 3]> = vec![
+    let indices: Vec<[u32; 3]> = vec![
         [0, 11, 5],
         [0, 5, 1],
         [0, 1, 7],
@@ -124,6 +124,22 @@ pub fn sphere(levels: u32) -> Mesh {
         [8, 6, 7],
         [9, 8, 1],
     ];
+    Mesh {
+        positions,
+        normals: Vec::new(),
+        uvs: Vec::new(),
+        indices,
+    }
+}
+
+/// Unit sphere: an icosahedron subdivided `levels` times, vertices projected
+/// onto the sphere; normals equal positions.
+pub fn sphere(levels: u32) -> Mesh {
+    let Mesh {
+        mut positions,
+        mut indices,
+        ..
+    } = icosahedron();
     for _ in 0..levels {
         let mut midpoints: HashMap<(u32, u32), u32> = HashMap::new();
         let mut midpoint = |a: u32, b: u32, positions: &mut Vec<Vec3>| {

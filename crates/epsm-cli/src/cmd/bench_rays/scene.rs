@@ -62,44 +62,8 @@ pub fn random_rays(n: usize, lo: DVec3, hi: DVec3) -> Vec<Ray> {
 /// radially by ±10 % of sines.
 pub fn bumpy_sphere(triangles: usize) -> Mesh {
     let k = ((triangles as f64 / 20.0).sqrt().round() as u32).max(1);
-    let t = (1.0 + 5f32.sqrt()) / 2.0;
-    let v = [
-        [-1.0, t, 0.0],
-        [1.0, t, 0.0],
-        [-1.0, -t, 0.0],
-        [1.0, -t, 0.0],
-        [0.0, -1.0, t],
-        [0.0, 1.0, t],
-        [0.0, -1.0, -t],
-        [0.0, 1.0, -t],
-        [t, 0.0, -1.0],
-        [t, 0.0, 1.0],
-        [-t, 0.0, -1.0],
-        [-t, 0.0, 1.0],
-    ]
-    .map(Vec3::from);
-    let faces = [
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
+    let ico = epsm_render::scene::shapes::icosahedron();
+    let v = &ico.positions;
     let displace = |p: Vec3| {
         let d = p.normalize();
         let bump = (9.0 * d.x).sin() * (7.0 * d.y).sin() * (8.0 * d.z).sin()
@@ -107,14 +71,17 @@ pub fn bumpy_sphere(triangles: usize) -> Mesh {
         d * (1.0 + 0.08 * bump)
     };
     let mut mesh = Mesh::default();
-    for [a, b, c] in faces {
+    for &[a, b, c] in &ico.indices {
         let base = mesh.positions.len() as u32;
         let row_start = |i: u32| base + i * (k + 1) - i * (i.saturating_sub(1)) / 2;
         for i in 0..=k {
             for j in 0..=(k - i) {
                 let (u, w) = (i as f32 / k as f32, j as f32 / k as f32);
-                mesh.positions
-                    .push(displace(v[a] + (v[b] - v[a]) * u + (v[c] - v[a]) * w));
+                mesh.positions.push(displace(
+                    v[a as usize]
+                        + (v[b as usize] - v[a as usize]) * u
+                        + (v[c as usize] - v[a as usize]) * w,
+                ));
             }
         }
         for i in 0..k {
