@@ -142,10 +142,11 @@ pub(crate) fn fit_potentials(clustered: &Clustered, potential: &[f64]) -> Vec<Po
             let mut a = [[0.0f64; DIM]; DIM];
             let mut rhs = [0.0f64; DIM];
             for i in c.range.clone() {
-                for p in 0..DIM {
-                    rhs[p] += delta(i, p) * (potential[i] - mean);
-                    for q in 0..DIM {
-                        a[p][q] += delta(i, p) * delta(i, q);
+                let d: [f64; DIM] = std::array::from_fn(|k| delta(i, k));
+                for (p, row) in a.iter_mut().enumerate() {
+                    rhs[p] += d[p] * (potential[i] - mean);
+                    for (q, entry) in row.iter_mut().enumerate() {
+                        *entry += d[p] * d[q];
                     }
                 }
             }
@@ -172,13 +173,14 @@ pub(crate) fn fit_potentials(clustered: &Clustered, potential: &[f64]) -> Vec<Po
 fn solve_spd(mut a: [[f64; DIM]; DIM], mut b: [f64; DIM]) -> [f64; DIM] {
     for k in 0..DIM {
         let pivot = a[k][k];
-        if !(pivot.abs() > 0.0) || !pivot.is_finite() {
+        if pivot == 0.0 || !pivot.is_finite() {
             return [0.0; DIM];
         }
+        let pivot_row = a[k];
         for r in k + 1..DIM {
             let m = a[r][k] / pivot;
-            for c in k..DIM {
-                a[r][c] -= m * a[k][c];
+            for (entry, p) in a[r].iter_mut().zip(pivot_row).skip(k) {
+                *entry -= m * p;
             }
             b[r] -= m * b[k];
         }

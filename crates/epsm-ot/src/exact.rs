@@ -8,12 +8,16 @@
 //! 1. **Warm start**: entropic potentials `f, g` from `sinkhorn` at `warm_start.blur`.
 //! 2. **Candidate graph**: for each source point the `candidates` targets of
 //!    smallest `c_ij − g_j`, and for each target the sources of smallest `c_ij − f_i`,
-//!    searched only inside the truncated plan's block support.
-//! 3. **Sparse solve**: shortest augmenting paths with potentials `v = g` (`sparse`).
+//!    searched only inside the truncated plan's block support, plus one
+//!    perfect matching (grid order) so the graph always has one.
+//! 3. **Sparse solve**: an ε-scaling auction from prices `−g` finds near-optimal
+//!    potentials (`auction`), then shortest augmenting paths make the
+//!    matching exactly complementary-slack with them (`sparse`).
 //! 4. **Optimality check**: a streaming pass over all pairs (block pairs are
 //!    skipped only when a rigorous bound proves `c_ij − u_i − v_j ≥ 0` for
 //!    all of them, see `blocks`) collects every pair with reduced cost below
-//!    `−tolerance`; they are added to the graph and step 3 resumes. When none
+//!    `−tolerance`; each row's `candidates` worst violators are added to the
+//!    graph and the augmenting-path solve resumes. When none
 //!    remain, `u, v` are feasible for the full problem and tight on the
 //!    matching, so the matching is optimal (to within `n · tolerance` in total cost).
 //!
@@ -22,8 +26,11 @@
 //! | `exact.dense_below`    | use the dense O(n³) solver below this n    | 64      |
 //! | `exact.candidates`     | candidate targets per point (and sources per target) | 8 |
 //! | `exact.tolerance`      | reduced cost counted as a violation below −tolerance | 1e-11 |
-//! | `exact.warm_start`     | Sinkhorn settings of the warm start        | blur 0.01, marginal tol 1e-2 |
+//! | `exact.auction_start`  | first ε of the auction                     | 1e-2    |
+//! | `exact.auction_end`    | last ε of the auction                      | 1e-9    |
+//! | `exact.warm_start`     | Sinkhorn settings of the warm start        | blur 0.03, one update per scale, ≤ 10 polish updates |
 
+mod auction;
 pub mod dense;
 mod sparse;
 
@@ -48,6 +55,10 @@ pub struct ExactSettings {
     pub tolerance: f64,
     /// The entropic solve that provides potentials and candidates.
     pub warm_start: SinkhornSettings,
+    /// First ε of the auction (in cost units).
+    pub auction_start: f64,
+    /// Last ε of the auction, before the exact finish.
+    pub auction_end: f64,
 }
 
 impl Default for ExactSettings {
@@ -57,10 +68,15 @@ impl Default for ExactSettings {
             candidates: 8,
             tolerance: 1e-11,
             warm_start: SinkhornSettings {
+                blur: 0.03,
                 marginal_tolerance: 1e-2,
-                max_polish_iterations: 50,
+                max_polish_iterations: 10,
+                max_scale_iterations: 1,
+                annealing_overrelaxation: 1.0,
                 ..SinkhornSettings::default()
             },
+            auction_start: 1e-2,
+            auction_end: 1e-9,
         }
     }
 }
@@ -83,11 +99,21 @@ impl ExactSettings {
                 reason: "must be at least 1",
             });
         }
-        if !(self.tolerance >= 0.0 && self.tolerance.is_finite()) {
+        if !self.tolerance.is_finite() || self.tolerance < 0.0 {
             return Err(OtError::InvalidSetting {
                 key: "exact.tolerance",
                 value: self.tolerance,
                 reason: "must be finite and non-negative",
+            });
+        }
+        let auction_ok = self.auction_end > 0.0
+            && self.auction_start >= self.auction_end
+            && self.auction_start.is_finite();
+        if !auction_ok {
+            return Err(OtError::InvalidSetting {
+                key: "exact.auction_start",
+                value: self.auction_start,
+                reason: "need auction_start >= auction_end > 0",
             });
         }
         self.warm_start.validate()
@@ -107,17 +133,50 @@ pub fn solve(
     }
     let x = Clustered::new(source, settings.warm_start.cluster_size);
     let y = Clustered::new(target, settings.warm_start.cluster_size);
+    let solved = solve_sorted(&x, &y, diameter_sq(source, target), settings);
+    let mut perm = vec![0usize; n];
+    for (k, &j) in solved.perm.iter().enumerate() {
+        perm[x.order[k] as usize] = y.order[j] as usize;
+    }
+    Ok(dense::permutation_result(
+        source,
+        target,
+        perm,
+        solved.stats,
+    ))
+}
+
+/// A verified optimal assignment between two clustered clouds, in their sorted orders.
+pub(crate) struct SortedAssignment {
+    /// Sorted source `k` is matched to sorted target `perm[k]`.
+    pub perm: Vec<usize>,
+    /// Row potentials (feasible for all pairs, tight on the matching).
+    pub u: Vec<f64>,
+    /// Column potentials.
+    pub v: Vec<f64>,
+    /// Work counters.
+    pub stats: SolveStats,
+}
+
+/// Steps 1–4 of the module doc on clustered clouds.
+pub(crate) fn solve_sorted(
+    x: &Clustered,
+    y: &Clustered,
+    diameter_sq: f64,
+    settings: &ExactSettings,
+) -> SortedAssignment {
+    let n = x.cloud.len();
 
     // Warm start and candidate graph.
-    let dual = solve_dual(&x, &y, diameter_sq(source, target), &settings.warm_start);
+    let dual = solve_dual(x, y, diameter_sq, &settings.warm_start);
     let (f, g) = (dual.f, dual.g);
     let mut stats = SolveStats {
         pair_evaluations: dual.pairs,
         ..SolveStats::default()
     };
     let k = settings.candidates;
-    let mut edges = best_partners(&x, &y, &dual.support.rows, &g, k);
-    for (j, row) in best_partners(&y, &x, &dual.support.cols, &f, k)
+    let mut edges = best_partners(x, y, &dual.support.rows, &g, k);
+    for (j, row) in best_partners(y, x, &dual.support.cols, &f, k)
         .into_iter()
         .enumerate()
     {
@@ -125,13 +184,28 @@ pub fn solve(
             edges[i as usize].push((j as u32, c));
         }
     }
+    // A perfect matching (sorted source k to sorted target k, both in grid order)
+    // guarantees the graph has one, so the auction terminates.
+    for (k, row) in edges.iter_mut().enumerate() {
+        row.push((k as u32, sq_dist_f64(&x.cloud.point(k), &y.cloud.point(k))));
+    }
     for row in &mut edges {
         row.sort_unstable_by_key(|e| e.0);
         row.dedup_by_key(|e| e.0);
     }
-    let mut lsap = SparseAssignment::new(edges, g);
-
-    // Sparse solve, then check all pairs and add violators until none remain.
+    // Price discovery by auction, then an exact shortest-augmenting-path finish.
+    let mut q: Vec<f64> = g.iter().map(|&t| -t).collect();
+    let v = match auction::run(
+        &edges,
+        &mut q,
+        settings.auction_start,
+        settings.auction_end,
+        0.2,
+    ) {
+        Some(_) => q.iter().map(|&t| -t).collect(),
+        None => g,
+    };
+    let mut lsap = SparseAssignment::new(edges, v);
     loop {
         stats.iterations += 1;
         for i in lsap.free_rows() {
@@ -154,21 +228,21 @@ pub fn solve(
                 );
             }
         }
-        let (violations, checked) = violations(&x, &y, &lsap.u, &lsap.v, settings.tolerance);
+        // Optimality check over all pairs; add each row's worst violators and solve again.
+        let (violations, checked) = violations(x, y, &lsap.u, &lsap.v, settings.tolerance, k);
         stats.pair_evaluations += checked;
         if violations.is_empty() {
-            break;
+            stats.candidate_pairs = lsap.edge_count();
+            return SortedAssignment {
+                perm: lsap.permutation(),
+                u: lsap.u,
+                v: lsap.v,
+                stats,
+            };
         }
         stats.added_pairs += violations.len();
         lsap.add_edges(&violations);
     }
-    stats.candidate_pairs = lsap.edge_count();
-    let perm_sorted = lsap.permutation();
-    let mut perm = vec![0usize; n];
-    for (k, &j) in perm_sorted.iter().enumerate() {
-        perm[x.order[k] as usize] = y.order[j] as usize;
-    }
-    Ok(dense::permutation_result(source, target, perm, stats))
 }
 
 /// For each point of `x`, the `k` points of `y` with the smallest `c_ij − pot_j` inside the listed blocks.
@@ -200,22 +274,29 @@ fn best_partners(
                     });
                     scored.truncate(keep);
                 }
-                scored.into_iter().map(|(_, j, c)| (j, c)).collect()
+                // A fresh vector: collecting in place would keep the large buffer alive.
+                let mut partners = Vec::with_capacity(scored.len());
+                partners.extend(scored.iter().map(|&(_, j, c)| (j, c)));
+                partners
             })
         })
         .collect()
 }
 
-/// Every pair with `c_ij − u_i − v_j < −tolerance`, and the number of pairs evaluated.
+/// A candidate edge `(row, column, cost)`.
+type Edge = (u32, u32, f64);
+
+/// For each row, its `per_row` most violated pairs (`c_ij − u_i − v_j < −tolerance`), and the number of pairs evaluated.
 fn violations(
     x: &Clustered,
     y: &Clustered,
     u: &[f64],
     v: &[f64],
     tolerance: f64,
-) -> (Vec<(u32, u32, f64)>, u64) {
+    per_row: usize,
+) -> (Vec<Edge>, u64) {
     let sup = Support::truncated(x, &fit_potentials(x, u), y, &fit_potentials(y, v), 0.0);
-    let parts: Vec<(Vec<(u32, u32, f64)>, u64)> = x
+    let parts: Vec<(Vec<Edge>, u64)> = x
         .clusters
         .par_iter()
         .zip(&sup.rows)
@@ -224,15 +305,25 @@ fn violations(
             let mut checked = 0u64;
             for i in ci.range.clone() {
                 let p = x.cloud.point(i);
+                let mut row: Vec<(f64, u32, f64)> = Vec::new();
                 for j in list
                     .iter()
                     .flat_map(|&jb| y.clusters[jb as usize].range.clone())
                 {
                     let c = sq_dist_f64(&p, &y.cloud.point(j));
-                    if c - u[i] - v[j] < -tolerance {
-                        found.push((i as u32, j as u32, c));
+                    let reduced = c - u[i] - v[j];
+                    // Rounding of c, u and v is not a violation (matters for far-apart clouds).
+                    if reduced < -(tolerance + 4.0 * f64::EPSILON * (c + u[i].abs() + v[j].abs())) {
+                        row.push((reduced, j as u32, c));
                     }
                 }
+                if row.len() > per_row {
+                    row.select_nth_unstable_by(per_row, |a, b| {
+                        a.0.total_cmp(&b.0).then(a.1.cmp(&b.1))
+                    });
+                    row.truncate(per_row);
+                }
+                found.extend(row.into_iter().map(|(_, j, c)| (i as u32, j, c)));
                 checked += list
                     .iter()
                     .map(|&jb| y.clusters[jb as usize].range.len() as u64)

@@ -94,7 +94,44 @@ pub(crate) fn stream_row<const MOMENTS: bool>(
     lw: &[f32],
     g: &[f32],
     inv_eps: f32,
-    ranges: impl Iterator<Item = Range<usize>>,
+    ranges: &[Range<usize>],
+    acc: &mut RowSum,
+) -> u64 {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx") {
+        #[allow(unsafe_code)]
+        // SAFETY: `stream_row_avx` only requires the AVX instruction set, whose
+        // presence on the running CPU was checked just above; it has no other
+        // precondition (it is the same safe code compiled for wider registers).
+        return unsafe { stream_row_avx::<MOMENTS>(x, y, lw, g, inv_eps, ranges, acc) };
+    }
+    stream_row_portable::<MOMENTS>(x, y, lw, g, inv_eps, ranges, acc)
+}
+
+/// [`stream_row_portable`] compiled with 256-bit AVX registers (selected at run time).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+fn stream_row_avx<const MOMENTS: bool>(
+    x: &Point,
+    y: &[Vec<f32>; DIM],
+    lw: &[f32],
+    g: &[f32],
+    inv_eps: f32,
+    ranges: &[Range<usize>],
+    acc: &mut RowSum,
+) -> u64 {
+    stream_row_portable::<MOMENTS>(x, y, lw, g, inv_eps, ranges, acc)
+}
+
+/// The portable body of [`stream_row`] (SSE2 on any x86_64).
+#[inline(always)]
+fn stream_row_portable<const MOMENTS: bool>(
+    x: &Point,
+    y: &[Vec<f32>; DIM],
+    lw: &[f32],
+    g: &[f32],
+    inv_eps: f32,
+    ranges: &[Range<usize>],
     acc: &mut RowSum,
 ) -> u64 {
     let mut scores = [f32::NEG_INFINITY; BLOCK];
@@ -210,15 +247,7 @@ mod tests {
         let x = [0.3, 0.1, 0.7, 0.2, 0.9];
         let inv_eps = 20.0;
         let mut acc = RowSum::new();
-        let pairs = stream_row::<true>(
-            &x,
-            &y,
-            &h,
-            &g,
-            inv_eps,
-            [0..40, 40..n].into_iter(),
-            &mut acc,
-        );
+        let pairs = stream_row::<true>(&x, &y, &h, &g, inv_eps, &[0..40, 40..n], &mut acc);
         assert_eq!(pairs, n as u64);
         let scores: Vec<f64> = (0..n)
             .map(|j| {

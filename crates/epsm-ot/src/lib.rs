@@ -21,6 +21,20 @@
 //! - **Determinism**: the same input gives bit-identical output whatever the
 //!   number of rayon threads (fixed chunks, reductions in a fixed order).
 //!
+//! # Solvers
+//! All behind [`Matcher`], all returning an [`OtResult`] (loss, gradient, [`Matching`]):
+//! - [`exact`]: the optimal permutation, with a certificate: dual potentials
+//!   feasible for *all* n² pairs (checked by a streaming pass with rigorous
+//!   block pruning) and tight on the matching. Sparse candidate graph from a
+//!   Sinkhorn warm start, ε-scaling auction, shortest augmenting paths; never
+//!   builds the n×n matrix. [`exact::dense`] is the O(n³) reference.
+//! - [`sinkhorn`]: entropic OT, log-domain, ε-scaling, multiscale with kernel
+//!   truncation, computed online; iterates at the final ε until the L1
+//!   marginal error is below the tolerance (1e-3 by default).
+//! - [`sliced`]: approximate sliced OT (random 1-D projections).
+//!
+//! [`synthetic::blobs_pair`] is the benchmark fixture (`epsm bench ot`).
+//!
 //! # Example
 //! ```
 //! use epsm_ot::{Matcher, PointCloud};

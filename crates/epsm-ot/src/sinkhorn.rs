@@ -15,6 +15,10 @@
 //! | `sinkhorn.truncation`      | drop pairs with `c − f − g > t·ε`         | 30      | ≥ 10       |
 //! | `sinkhorn.marginal_tolerance` | L1 marginal error to reach at final ε | 1e-3    | > 0        |
 //! | `sinkhorn.overrelaxation`  | ω of the updates at the final ε           | 1.9     | [1, 2)     |
+//! | `sinkhorn.max_scale_iterations` | most updates per fine scale          | 30      | ≥ 1        |
+//! | `sinkhorn.scale_tolerance` | marginal error ending a fine scale        | 3e-3    | > 0        |
+//! | `sinkhorn.annealing_overrelaxation` | ω of the fine-phase updates      | 1.5     | [1, 2)     |
+//! | `sinkhorn.exact_prices`    | warm-start the final ε from exact duals   | true    | bool       |
 //!
 //! **Loss**: `OT_ε = ⟨α, f⟩ + ⟨β, g⟩` (or, debiased,
 //! `S_ε = OT_ε(α, β) − ½ OT_ε(α, α) − ½ OT_ε(β, β)`).
@@ -33,6 +37,7 @@
 //! ```
 
 mod dual;
+mod pass;
 
 use crate::blocks::Clustered;
 use crate::cost::{diameter_sq, displacement_gradient};
@@ -40,7 +45,7 @@ use crate::error::OtError;
 use crate::plan::{EntropicPlan, Matching, OtResult, SolveStats};
 use crate::points::{Point, PointCloud, check_pair};
 
-pub(crate) use dual::{Dual, solve_dual};
+pub(crate) use dual::{Dual, polish, solve_dual};
 
 /// Settings of the entropic solver, with named presets.
 #[derive(Debug, Clone, PartialEq)]
@@ -59,6 +64,17 @@ pub struct SinkhornSettings {
     pub max_polish_iterations: usize,
     /// Over-relaxation ω of the extra iterations, in `[1, 2)` (1 is plain Sinkhorn).
     pub overrelaxation: f64,
+    /// Most updates per scale of the fine phase.
+    pub max_scale_iterations: usize,
+    /// A scale of the fine phase ends once its marginal error is below this.
+    pub scale_tolerance: f64,
+    /// Over-relaxation ω of the fine phase, in `[1, 2)`.
+    pub annealing_overrelaxation: f64,
+    /// Start the final-ε iterations from the exact assignment's dual potentials
+    /// (which that solver finds by an ε-scaling Sinkhorn warm start and an
+    /// auction) instead of running the fine phase of the ε-scaling schedule.
+    /// Same fixed point, far fewer Sinkhorn iterations at small blur.
+    pub exact_prices: bool,
     /// Points per cluster of the multiscale blocks.
     pub cluster_size: usize,
     /// The coarse phase runs while `√ε` exceeds this many mean cluster radii.
@@ -75,6 +91,10 @@ impl Default for SinkhornSettings {
             marginal_tolerance: 1e-3,
             max_polish_iterations: 5000,
             overrelaxation: 1.9,
+            max_scale_iterations: 30,
+            scale_tolerance: 3e-3,
+            annealing_overrelaxation: 1.5,
+            exact_prices: true,
             cluster_size: 32,
             jump_radii: 2.0,
         }
@@ -104,23 +124,31 @@ impl SinkhornSettings {
         }
     }
 
+    /// Pure ε-scaling Sinkhorn (GeomLoss's loop plus the marginal polish), no exact warm start.
+    pub fn annealed() -> Self {
+        Self {
+            exact_prices: false,
+            ..Self::default()
+        }
+    }
+
     /// Checks every setting against its documented range.
     pub fn validate(&self) -> Result<(), OtError> {
         let bad = |key, value: f64, reason| Err(OtError::InvalidSetting { key, value, reason });
-        if !(self.blur > 0.0 && self.blur.is_finite()) {
+        if !self.blur.is_finite() || self.blur <= 0.0 {
             return bad("sinkhorn.blur", self.blur, "must be positive and finite");
         }
-        if !(self.scaling > 0.0 && self.scaling < 1.0) {
+        if self.scaling.is_nan() || self.scaling <= 0.0 || self.scaling >= 1.0 {
             return bad("sinkhorn.scaling", self.scaling, "must be in (0, 1)");
         }
-        if !(self.truncation >= 10.0) {
+        if self.truncation.is_nan() || self.truncation < 10.0 {
             return bad(
                 "sinkhorn.truncation",
                 self.truncation,
                 "must be at least 10",
             );
         }
-        if !(self.marginal_tolerance > 0.0) {
+        if self.marginal_tolerance.is_nan() || self.marginal_tolerance <= 0.0 {
             return bad(
                 "sinkhorn.marginal_tolerance",
                 self.marginal_tolerance,
@@ -134,10 +162,20 @@ impl SinkhornSettings {
                 "must be in [1, 2)",
             );
         }
+        if !(1.0..2.0).contains(&self.annealing_overrelaxation) {
+            return bad(
+                "sinkhorn.annealing_overrelaxation",
+                self.annealing_overrelaxation,
+                "must be in [1, 2)",
+            );
+        }
+        if self.max_scale_iterations == 0 {
+            return bad("sinkhorn.max_scale_iterations", 0.0, "must be at least 1");
+        }
         if self.cluster_size == 0 {
             return bad("sinkhorn.cluster_size", 0.0, "must be at least 1");
         }
-        if !(self.jump_radii > 0.0) {
+        if self.jump_radii.is_nan() || self.jump_radii <= 0.0 {
             return bad("sinkhorn.jump_radii", self.jump_radii, "must be positive");
         }
         Ok(())
@@ -154,8 +192,14 @@ struct Solved {
 }
 
 fn solve_one(x: &Clustered, y: &Clustered, diam2: f64, settings: &SinkhornSettings) -> Solved {
-    let dual = solve_dual(x, y, diam2, settings);
-    let (barycentres, costs, bary_pairs) = dual::barycentres(x, y, &dual);
+    let dual = if settings.exact_prices {
+        // Start the final-ε iterations from the optimal assignment's dual potentials.
+        let ex = crate::exact::solve_sorted(x, y, diam2, &crate::ExactSettings::default());
+        polish(x, y, ex.u, ex.v, settings, ex.stats.pair_evaluations, 0)
+    } else {
+        solve_dual(x, y, diam2, settings)
+    };
+    let (barycentres, costs, bary_pairs) = pass::barycentres(x, y, &dual);
     let n = x.cloud.len() as f64;
     let mean = |v: &[f64]| v.iter().sum::<f64>() / n;
     let value = mean(&dual.f) + mean(&dual.g);

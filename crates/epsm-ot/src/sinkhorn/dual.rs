@@ -13,45 +13,11 @@
 //!    the source marginal is at most the tolerance (the target marginal is
 //!    exact after each `g` update).
 
-use std::ops::Range;
-
 use rayon::prelude::*;
 
 use super::SinkhornSettings;
+use super::pass::{Level, coarse_cloud, softmin};
 use crate::blocks::{Clustered, Support, fit_potentials};
-use crate::kernel::{RowSum, stream_row};
-use crate::points::PointCloud;
-
-/// A measure as the kernel sees it: points, their blocks and log-weights.
-struct Level<'a> {
-    cloud: &'a PointCloud,
-    ranges: Vec<Range<usize>>,
-    log_w: Vec<f32>,
-}
-
-impl<'a> Level<'a> {
-    fn fine(c: &'a Clustered) -> Self {
-        let n = c.cloud.len();
-        Self {
-            cloud: &c.cloud,
-            ranges: c.ranges(),
-            log_w: vec![-(n as f32).ln(); n],
-        }
-    }
-}
-
-/// The centroid cloud of a clustering and its log-weights.
-fn coarse_cloud(c: &Clustered) -> (PointCloud, Vec<f32>) {
-    let n = c.cloud.len() as f32;
-    let columns =
-        std::array::from_fn(|d| c.clusters.iter().map(|k| k.centroid[d] as f32).collect());
-    let log_w = c
-        .clusters
-        .iter()
-        .map(|k| (k.range.len() as f32 / n).ln())
-        .collect();
-    (PointCloud::from_trusted_columns(columns), log_w)
-}
 
 /// Dual potentials of one entropic problem, in the clusterings' orders.
 #[derive(Debug, Clone)]
@@ -63,64 +29,6 @@ pub(crate) struct Dual {
     pub iterations: usize,
     pub pairs: u64,
     pub marginal_error: f64,
-}
-
-/// A potential shifted by its mean (summed in a fixed order) and rounded to `f32` for the kernel.
-///
-/// Potentials are only defined up to `f + κ, g − κ`; centring keeps `g_j − c_ij`
-/// small where it matters, so `f32` scores stay accurate even at tiny ε.
-fn centred(g: &[f64]) -> (Vec<f32>, f64) {
-    let kappa = g.iter().sum::<f64>() / g.len() as f64;
-    (g.iter().map(|&v| (v - kappa) as f32).collect(), kappa)
-}
-
-/// The target ranges of a block list, with consecutive blocks merged into one range.
-fn merged_ranges(ranges: &[Range<usize>], list: &[u32]) -> Vec<Range<usize>> {
-    let mut out: Vec<Range<usize>> = Vec::with_capacity(list.len());
-    for &j in list {
-        let r = ranges[j as usize].clone();
-        match out.last_mut() {
-            Some(last) if last.end == r.start => last.end = r.end,
-            _ => out.push(r),
-        }
-    }
-    out
-}
-
-/// `out_i = −ε log Σ_j exp(log w_j + (g_j − c(x_i, y_j))/ε)` over the listed blocks, with the pair count.
-fn softmin(x: &Level, y: &Level, lists: &[Vec<u32>], g: &[f64], eps: f64) -> (Vec<f64>, u64) {
-    let inv_eps = (1.0 / eps) as f32;
-    let cols = y.cloud.columns();
-    let (g32, kappa) = centred(g);
-    let parts: Vec<(Vec<f64>, u64)> = x
-        .ranges
-        .par_iter()
-        .zip(lists)
-        .map(|(rows, list)| {
-            let mut pairs = 0;
-            let targets = merged_ranges(&y.ranges, list);
-            let out = rows
-                .clone()
-                .map(|i| {
-                    let mut acc = RowSum::new();
-                    let blocks = targets.iter().cloned();
-                    pairs += stream_row::<false>(
-                        &x.cloud.point(i),
-                        cols,
-                        &y.log_w,
-                        &g32,
-                        inv_eps,
-                        blocks,
-                        &mut acc,
-                    );
-                    -kappa - eps * acc.log_sum()
-                })
-                .collect();
-            (out, pairs)
-        })
-        .collect();
-    let pairs = parts.iter().map(|p| p.1).sum();
-    (parts.into_iter().flat_map(|p| p.0).collect(), pairs)
 }
 
 /// The ε schedule of GeomLoss: `diameter²` down to `blur²` with ratio `scaling²`.
@@ -176,13 +84,23 @@ impl Loop<'_> {
     }
 }
 
-/// Runs the whole ε-scaling loop for the source `x` and target `y`.
-pub(crate) fn solve_dual(
+/// Potentials after the coarse phase and the jump, and where the schedule resumes.
+struct Coarse {
+    f: Vec<f64>,
+    g: Vec<f64>,
+    eps_list: Vec<f64>,
+    next: usize,
+    pairs: u64,
+    iterations: usize,
+}
+
+/// Steps 1 and 2 of the module doc: the coarse phase and the jump to the points.
+fn coarse_phase(
     x: &Clustered,
     y: &Clustered,
     diameter_sq: f64,
     settings: &SinkhornSettings,
-) -> Dual {
+) -> Coarse {
     let eps_list = schedule(diameter_sq, settings.blur, settings.scaling);
     let mut lp = Loop {
         x,
@@ -191,18 +109,16 @@ pub(crate) fn solve_dual(
         pairs: 0,
         iterations: 0,
     };
-
-    // Coarse phase: dense Sinkhorn on cluster centroids.
     let (cx_cloud, cx_w) = coarse_cloud(x);
     let (cy_cloud, cy_w) = coarse_cloud(y);
     let cx = Level {
         cloud: &cx_cloud,
-        ranges: vec![0..cx_w.len()],
+        ranges: std::iter::once(0..cx_w.len()).collect(),
         log_w: cx_w,
     };
     let cy = Level {
         cloud: &cy_cloud,
-        ranges: vec![0..cy_w.len()],
+        ranges: std::iter::once(0..cy_w.len()).collect(),
         log_w: cy_w,
     };
     let whole = Support::dense(1, 1);
@@ -220,22 +136,83 @@ pub(crate) fn solve_dual(
         lp.step(&cx, &cy, &whole, &mut fc, &mut gc, eps_list[k]);
         k += 1;
     }
-
-    // Jump: extrapolate fine potentials from the coarse ones.
     let eps_jump = eps_list[k - 1];
     let (fx, fy) = (Level::fine(x), Level::fine(y));
     let to_coarse = |n: usize| vec![vec![0u32]; n];
-    let (mut f, p1) = softmin(&fx, &cy, &to_coarse(fx.ranges.len()), &gc, eps_jump);
-    let (mut g, p2) = softmin(&fy, &cx, &to_coarse(fy.ranges.len()), &fc, eps_jump);
-    lp.pairs += p1 + p2;
-
-    // Fine phase: truncated updates down the rest of the schedule.
-    for &eps in &eps_list[k..] {
-        let sup = lp.support(&f, &g, eps);
-        lp.step(&fx, &fy, &sup, &mut f, &mut g, eps);
+    let (f, p1) = softmin(&fx, &cy, &to_coarse(fx.ranges.len()), &gc, eps_jump);
+    let (g, p2) = softmin(&fy, &cx, &to_coarse(fy.ranges.len()), &fc, eps_jump);
+    Coarse {
+        f,
+        g,
+        eps_list,
+        next: k,
+        pairs: lp.pairs + p1 + p2,
+        iterations: lp.iterations,
     }
+}
 
-    // Polish: over-relaxed updates at the final ε until the source marginal is within tolerance.
+/// Runs the whole ε-scaling loop for the source `x` and target `y`.
+pub(crate) fn solve_dual(
+    x: &Clustered,
+    y: &Clustered,
+    diameter_sq: f64,
+    settings: &SinkhornSettings,
+) -> Dual {
+    let Coarse {
+        mut f,
+        mut g,
+        eps_list,
+        next,
+        pairs,
+        iterations,
+    } = coarse_phase(x, y, diameter_sq, settings);
+    let mut lp = Loop {
+        x,
+        y,
+        settings,
+        pairs,
+        iterations,
+    };
+    let (fx, fy) = (Level::fine(x), Level::fine(y));
+
+    // Fine phase: truncated, over-relaxed updates at each remaining scale until its marginal error is small.
+    for &eps in &eps_list[next..] {
+        let sup = lp.support(&f, &g, eps);
+        for _ in 0..settings.max_scale_iterations {
+            let (ft, p1) = softmin(&fx, &fy, &sup.rows, &g, eps);
+            let err = row_marginal_error(&f, &ft, eps);
+            relax(&mut f, &ft, settings.annealing_overrelaxation);
+            let (gt, p2) = softmin(&fy, &fx, &sup.cols, &f, eps);
+            relax(&mut g, &gt, settings.annealing_overrelaxation);
+            lp.pairs += p1 + p2;
+            lp.iterations += 1;
+            if err <= settings.scale_tolerance {
+                break;
+            }
+        }
+    }
+    polish(x, y, f, g, settings, lp.pairs, lp.iterations)
+}
+
+/// Polish: over-relaxed updates at the final ε, from potentials `f, g`, until the source
+/// marginal is within tolerance; `pairs` and `iterations` carry the work done so far.
+pub(crate) fn polish(
+    x: &Clustered,
+    y: &Clustered,
+    mut f: Vec<f64>,
+    mut g: Vec<f64>,
+    settings: &SinkhornSettings,
+    pairs: u64,
+    iterations: usize,
+) -> Dual {
+    let mut lp = Loop {
+        x,
+        y,
+        settings,
+        pairs,
+        iterations,
+    };
+    let (fx, fy) = (Level::fine(x), Level::fine(y));
     let eps = settings.blur * settings.blur;
     let mut omega = settings.overrelaxation;
     let mut support = lp.support(&f, &g, eps);
@@ -301,46 +278,4 @@ fn row_marginal_error(f: &[f64], ft: &[f64], eps: f64) -> f64 {
         })
         .collect();
     parts.iter().sum::<f64>() / n
-}
-
-/// Per-source-point barycentre `Σ_j π_ij y_j / Σ_j π_ij` and mean cost, in the clustered order.
-pub(crate) fn barycentres(
-    x: &Clustered,
-    y: &Clustered,
-    dual: &Dual,
-) -> (Vec<[f32; 5]>, Vec<f64>, u64) {
-    let (fx, fy) = (Level::fine(x), Level::fine(y));
-    let (g32, _) = centred(&dual.g);
-    let inv_eps = (1.0 / dual.eps) as f32;
-    let cols = y.cloud.columns();
-    let parts: Vec<(Vec<([f32; 5], f64)>, u64)> = fx
-        .ranges
-        .par_iter()
-        .zip(&dual.support.rows)
-        .map(|(rows, list)| {
-            let mut pairs = 0;
-            let targets = merged_ranges(&fy.ranges, list);
-            let out = rows
-                .clone()
-                .map(|i| {
-                    let mut acc = RowSum::new();
-                    let blocks = targets.iter().cloned();
-                    pairs += stream_row::<true>(
-                        &x.cloud.point(i),
-                        cols,
-                        &fy.log_w,
-                        &g32,
-                        inv_eps,
-                        blocks,
-                        &mut acc,
-                    );
-                    acc.barycentre()
-                })
-                .collect();
-            (out, pairs)
-        })
-        .collect();
-    let pairs = parts.iter().map(|p| p.1).sum();
-    let (bary, cost) = parts.into_iter().flat_map(|p| p.0).unzip();
-    (bary, cost, pairs)
 }

@@ -1,5 +1,6 @@
-//! Loading scene files (the format is [`desc`](super::desc), documented in
-//! `docs/scene-format.md`): parse the TOML, deserialize it with unknown keys
+//! Loading scene files: TOML (here), glTF and Mitsuba XML (through
+//! [`import`](super::import), see [`load_file`]). The TOML format is
+//! [`desc`](super::desc), documented in `docs/scene-format.md`: parse the TOML, deserialize it with unknown keys
 //! rejected, check every value against its documented range and build the
 //! [`SceneParts`]. Every error is a [`SceneError`](crate::error::SceneError) naming the file, the dotted
 //! field (`objects[2].material`) and what was expected, with the line when the
@@ -23,10 +24,10 @@
 //! rotate = [{ axis = [1, 0, 0], angle = -90 }]
 //! ```
 
-mod build;
-mod check;
+pub(crate) mod build;
+pub(crate) mod check;
 mod locate;
-mod object;
+pub(crate) mod object;
 
 use std::path::Path;
 
@@ -34,22 +35,66 @@ use serde::de::DeserializeOwned;
 
 pub use locate::Locator;
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, SceneError};
 use crate::scene::desc::SceneDesc;
+use crate::scene::import::{gltf_scene, mitsuba};
 use crate::scene::{Scene, SceneParts};
 
-/// Loads the scene file at `path` and builds its BVH and light tables.
+/// Loads the scene file at `path` (any format [`load_file`] reads) and builds
+/// its BVH and light tables.
 pub fn load_scene(path: &Path) -> Result<Scene> {
     Scene::new(load_parts(path)?)
 }
 
-/// Loads the scene file at `path` into checked parts.
+/// Loads the scene file at `path` into checked parts (see [`load_file`]),
+/// printing its warnings, if any, to standard error.
 pub fn load_parts(path: &Path) -> Result<SceneParts> {
-    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
-        path: path.to_owned(),
-        source,
-    })?;
-    parts_from_str(&text, path)
+    let loaded = load_file(path)?;
+    for warning in &loaded.warnings {
+        eprintln!("warning: {warning}");
+    }
+    Ok(loaded.parts)
+}
+
+/// A loaded scene with the located warnings of its importer (elements it
+/// skipped because skipping them is safe, listed in `docs/interop.md`).
+#[derive(Clone, Debug)]
+pub struct Loaded {
+    /// The checked parts.
+    pub parts: SceneParts,
+    /// What the importer skipped, located like errors.
+    pub warnings: Vec<SceneError>,
+}
+
+/// Loads a scene file of any supported format, chosen by the
+/// (case-insensitive) extension: `.toml` (this crate's format), `.gltf` /
+/// `.glb` (a whole glTF 2.0 scene, [`gltf_scene`]) or `.xml` (Mitsuba 3,
+/// [`mitsuba`]). A glTF file named by a TOML object's `mesh` stays a mesh.
+pub fn load_file(path: &Path) -> Result<Loaded> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    match ext.as_deref() {
+        Some("toml") => {
+            let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+                path: path.to_owned(),
+                source,
+            })?;
+            Ok(Loaded {
+                parts: parts_from_str(&text, path)?,
+                warnings: Vec::new(),
+            })
+        }
+        Some("gltf" | "glb") => gltf_scene::load(path),
+        Some("xml") => mitsuba::load(path),
+        _ => Err(SceneError::new(
+            path,
+            "document",
+            "unsupported scene format: expected a .toml, .gltf, .glb or .xml file",
+        )
+        .into()),
+    }
 }
 
 /// Builds checked parts from the text of a scene file; `file` names it in

@@ -18,7 +18,7 @@ use std::sync::Arc;
 
 use glam::{DAffine3, DVec3, Vec3};
 
-pub use load::{load_parts, load_scene, parts_from_str};
+pub use load::{Loaded, load_file, load_parts, load_scene, parts_from_str};
 pub use mesh::Mesh;
 
 use crate::bvh::Accel;

@@ -1,6 +1,8 @@
-//! Mesh files: Wavefront OBJ ([`obj`]) and glTF 2.0 ([`gltf`], `.gltf` and
-//! `.glb`), each flattened into one object-space [`Mesh`], and the
-//! validation every mesh passes whatever its source.
+//! Foreign files. Mesh files: Wavefront OBJ ([`obj`]), Stanford PLY
+//! ([`ply`]) and glTF 2.0 ([`gltf`], `.gltf` and `.glb`), each flattened into
+//! one object-space [`Mesh`], and the validation every mesh passes whatever
+//! its source. Whole scenes: glTF 2.0 ([`gltf_scene`]) and Mitsuba 3 XML
+//! ([`mitsuba`]), mapped as documented in `docs/interop.md`.
 //!
 //! | check | error field |
 //! |---|---|
@@ -13,12 +15,15 @@
 //! ```toml
 //! [[objects]]
 //! name = "bunny"
-//! mesh = "meshes/bunny.obj"   # or .gltf / .glb
+//! mesh = "meshes/bunny.obj"   # or .ply / .gltf / .glb
 //! material = "white"
 //! ```
 
 pub mod gltf;
+pub mod gltf_scene;
+pub mod mitsuba;
 pub mod obj;
+pub mod ply;
 
 use std::path::Path;
 
@@ -26,7 +31,7 @@ use crate::error::{Result, SceneError};
 use crate::scene::Mesh;
 
 /// Loads and validates a mesh file, choosing the importer by extension
-/// (`.obj`, `.gltf`, `.glb`, case-insensitive). Errors name `path`.
+/// (`.obj`, `.ply`, `.gltf`, `.glb`, case-insensitive). Errors name `path`.
 pub fn load_mesh(path: &Path) -> Result<Mesh> {
     let ext = path
         .extension()
@@ -34,12 +39,13 @@ pub fn load_mesh(path: &Path) -> Result<Mesh> {
         .map(str::to_ascii_lowercase);
     let mesh = match ext.as_deref() {
         Some("obj") => obj::load(path)?,
+        Some("ply") => ply::load(path)?,
         Some("gltf" | "glb") => gltf::load(path)?,
         _ => {
             return Err(SceneError::new(
                 path,
                 "mesh",
-                "unsupported mesh format: expected a .obj, .gltf or .glb file",
+                "unsupported mesh format: expected a .obj, .ply, .gltf or .glb file",
             )
             .into());
         }

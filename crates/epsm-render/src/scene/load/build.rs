@@ -6,6 +6,8 @@ use std::collections::{HashMap, HashSet};
 use std::path::PathBuf;
 use std::sync::Arc;
 
+use glam::DVec3;
+
 use super::check::Ctx;
 use super::object::Objects;
 use crate::camera::Camera;
@@ -64,26 +66,52 @@ pub fn parts(desc: &SceneDesc, ctx: &Ctx) -> Result<SceneParts> {
 }
 
 fn camera(c: &CameraDesc, ctx: &Ctx) -> Result<Camera> {
-    let origin = ctx.vec3("camera.origin", c.origin)?;
-    let target = ctx.vec3("camera.target", c.target)?;
-    let up = ctx.vec3("camera.up", c.up)?;
-    let fov = ctx.finite("camera.fov", c.fov)?;
+    let view = View {
+        origin: ctx.vec3("camera.origin", c.origin)?,
+        target: ctx.vec3("camera.target", c.target)?,
+        up: ctx.vec3("camera.up", c.up)?,
+        fov_y: ctx.finite("camera.fov", c.fov)?,
+        resolution: c.resolution,
+    };
+    checked_camera(&view, "camera", ctx)
+}
+
+/// A pinhole camera's placement before its checks (finite values).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct View {
+    /// Eye position, world space.
+    pub origin: DVec3,
+    /// A point looked at.
+    pub target: DVec3,
+    /// Up hint.
+    pub up: DVec3,
+    /// Vertical field of view, degrees.
+    pub fov_y: f64,
+    /// `[width, height]`, pixels.
+    pub resolution: [u32; 2],
+}
+
+/// The camera of `view`, checked (field of view in (0, 180), resolution in
+/// range, a defined view direction, `up` not parallel to it); errors name
+/// `{field}.fov`, `{field}.resolution[i]`, `{field}.target` or `{field}.up`.
+pub(crate) fn checked_camera(view: &View, field: &str, ctx: &Ctx) -> Result<Camera> {
+    let fov = view.fov_y;
     if !(fov > 0.0 && fov < 180.0) {
-        return Err(ctx.err(
-            "camera.fov",
-            format!("expected degrees in (0, 180), found {fov}"),
-        ));
+        let msg = format!("expected degrees in (0, 180), found {fov}");
+        return Err(ctx.err(&format!("{field}.fov"), msg));
     }
-    let [w, h] = c.resolution;
-    ctx.count("camera.resolution[0]", w, 1, MAX_RESOLUTION)?;
-    ctx.count("camera.resolution[1]", h, 1, MAX_RESOLUTION)?;
+    let [w, h] = view.resolution;
+    ctx.count(&format!("{field}.resolution[0]"), w, 1, MAX_RESOLUTION)?;
+    ctx.count(&format!("{field}.resolution[1]"), h, 1, MAX_RESOLUTION)?;
+    let (origin, target, up) = (view.origin, view.target, view.up);
     let forward = (target - origin).try_normalize().ok_or_else(|| {
-        ctx.err(
-            "camera.target",
-            "equals camera.origin: the view direction is undefined",
-        )
+        let msg = "equals the camera origin: the view direction is undefined";
+        ctx.err(&format!("{field}.target"), msg)
     })?;
-    let parallel = || ctx.err("camera.up", "is zero or parallel to the view direction");
+    let parallel = || {
+        let msg = "is zero or parallel to the view direction";
+        ctx.err(&format!("{field}.up"), msg)
+    };
     if forward.cross(up).length() <= 1e-9 * up.length() {
         return Err(parallel());
     }
@@ -100,7 +128,12 @@ fn render(r: &RenderDesc, ctx: &Ctx) -> Result<RenderSettings> {
 }
 
 /// Loads the image at `relative` (from field `field`) through the cache.
-fn image(field: &str, relative: &str, ctx: &Ctx, images: &mut ImageCache) -> Result<Arc<Image>> {
+pub(crate) fn image(
+    field: &str,
+    relative: &str,
+    ctx: &Ctx,
+    images: &mut ImageCache,
+) -> Result<Arc<Image>> {
     let path = ctx.resolve(relative);
     if !is_supported(&path) {
         let msg = format!("expected a .png or .exr file, found \"{relative}\"");
@@ -197,18 +230,13 @@ fn material(name: &str, m: &MaterialDesc, ctx: &Ctx, images: &mut ImageCache) ->
                 .alpha
                 .ok_or_else(|| ctx.err(&key, "required for rough_conductor"))?;
             Bsdf::RoughConductor(RoughConductor {
-                alpha: ctx.within(&key, alpha, 1e-4, 1.0, "a value in [1e-4, 1]")? as f32,
+                alpha: ctx.alpha(&key, alpha)?,
                 tint: unit("tint", m.tint, 1.0)?,
             })
         }
-        MaterialType::Dielectric => {
-            let key = format!("{field}.ior");
-            let ior = ctx.finite(&key, m.ior.unwrap_or(1.5))?;
-            if ior <= 0.0 {
-                return Err(ctx.err(&key, format!("expected a value > 0, found {ior}")));
-            }
-            Bsdf::Dielectric(Dielectric { ior: ior as f32 })
-        }
+        MaterialType::Dielectric => Bsdf::Dielectric(Dielectric {
+            ior: ctx.ior(&format!("{field}.ior"), m.ior.unwrap_or(1.5))?,
+        }),
     };
     Ok(Material {
         name: name.to_owned(),

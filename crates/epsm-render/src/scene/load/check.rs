@@ -10,6 +10,9 @@ use glam::{DVec3, Vec3};
 use super::locate::Locator;
 use crate::error::{Error, SceneError};
 
+/// Smallest accepted GGX roughness `alpha` (smoother surfaces are conductors).
+pub const MIN_ALPHA: f64 = 1e-4;
+
 /// What errors need to name a field: the file, its locator, and the prefix of
 /// the scene inside the file (empty unless embedded in a larger file).
 pub struct Ctx<'a> {
@@ -35,11 +38,16 @@ impl Ctx<'_> {
 
     /// An error at `field`, with its line when the file has it.
     pub fn err(&self, field: &str, message: impl Into<String>) -> Error {
+        self.located(field, message).into()
+    }
+
+    /// The located report of `message` at `field` (an error or a warning).
+    pub fn located(&self, field: &str, message: impl Into<String>) -> SceneError {
         let path = self.path(field);
         let line = self.locator.line(&path);
         let mut e = SceneError::new(self.file, path, message);
         e.line = line;
-        e.into()
+        e
     }
 
     /// A path from the file, resolved against the file's directory.
@@ -85,6 +93,21 @@ impl Ctx<'_> {
             self.within(&format!("{field}[{i}]"), x, 0.0, max, &what)?;
         }
         Ok(DVec3::from_array(v).as_vec3())
+    }
+
+    /// A GGX roughness `alpha` in `[MIN_ALPHA, 1]`.
+    pub fn alpha(&self, field: &str, v: f64) -> Result<f32, Error> {
+        let what = format!("a value in [{MIN_ALPHA}, 1]");
+        Ok(self.within(field, v, MIN_ALPHA, 1.0, &what)? as f32)
+    }
+
+    /// A (relative) index of refraction, finite and `> 0`.
+    pub fn ior(&self, field: &str, v: f64) -> Result<f32, Error> {
+        let v = self.finite(field, v)?;
+        if v <= 0.0 {
+            return Err(self.err(field, format!("expected a value > 0, found {v}")));
+        }
+        Ok(v as f32)
     }
 
     /// A count in `[lo, hi]`.

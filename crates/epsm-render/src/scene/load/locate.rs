@@ -43,6 +43,23 @@ impl Locator {
         locator
     }
 
+    /// A locator for `text` in a format other than TOML (such as Mitsuba
+    /// XML): each field is a dotted path with the byte range that defines it.
+    pub fn from_spans(text: &str, spans: impl IntoIterator<Item = (String, Range<usize>)>) -> Self {
+        let entries = spans
+            .into_iter()
+            .map(|(path, range)| Entry {
+                path,
+                key: range.clone(),
+                value: range,
+            })
+            .collect();
+        Self {
+            line_starts: line_starts(text),
+            entries,
+        }
+    }
+
     fn walk_table(&mut self, prefix: &str, table: &DeTable<'_>) {
         for (key, value) in table {
             let path = join(prefix, key.get_ref());

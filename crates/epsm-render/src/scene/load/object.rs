@@ -184,7 +184,7 @@ impl<'a> Objects<'a> {
 }
 
 /// `mesh` with reversed winding and negated normals.
-fn flipped(mesh: &Mesh) -> Mesh {
+pub(crate) fn flipped(mesh: &Mesh) -> Mesh {
     Mesh {
         positions: mesh.positions.clone(),
         normals: mesh.normals.iter().map(|n| -*n).collect(),
