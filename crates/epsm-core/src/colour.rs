@@ -73,8 +73,11 @@ fn with_value(material: &Material, target: Target, value: f32) -> Material {
 }
 
 impl ColourModel {
-    /// The model of `scene` (already at θ) for the parameters of `table`.
-    pub fn new(table: &ParamTable, scene: &Scene) -> Self {
+    /// The model of `scene` (already at θ) for the parameters of `table`;
+    /// `geometric` adds the terms of translated lights (used with the L2
+    /// loss: with OT, colour gradients point at matched colours, and these
+    /// broad shading terms would fight the screen-position gradients).
+    pub fn new(table: &ParamTable, scene: &Scene, geometric: bool) -> Self {
         let mut materials = vec![Vec::new(); scene.materials().len()];
         let mut emission = vec![None; scene.objects().len()];
         let mut area_moves = vec![Vec::new(); scene.objects().len()];
@@ -105,7 +108,7 @@ impl ColourModel {
                         *e = Some((param, v));
                     }
                 }
-                Target::Translate { object, axis: a } => {
+                Target::Translate { object, axis: a } if geometric => {
                     let emits = scene
                         .objects()
                         .get(object as usize)
@@ -114,7 +117,7 @@ impl ColourModel {
                         area_moves[object as usize].push((param, axis(a)));
                     }
                 }
-                Target::LightTranslate { light, axis: a } => {
+                Target::LightTranslate { light, axis: a } if geometric => {
                     if let Some(m) = point_moves.get_mut(light) {
                         m.push((param, axis(a)));
                     }

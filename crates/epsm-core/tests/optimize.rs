@@ -110,8 +110,9 @@ fn epsm_reduces_the_parameter_error_at_least_threefold() {
 
 #[test]
 fn pipeline_gradient_agrees_with_finite_differences_of_the_loss() {
-    // Smooth problem: L2 on an albedo (colour derivatives only), common
-    // random numbers: magnitude within 2 %.
+    // Smooth problem: L2 on an albedo (colour derivatives only). The L2
+    // loss is evaluated on a render independent of the differentiated paths
+    // (unbiased), so the two agree within Monte Carlo error: 5 % at 32 spp.
     let albedo = r#"
 [[parameters]]
 key = "box.albedo.r"
@@ -120,6 +121,7 @@ true = 0.8
 "#;
     let mut p = tiny(albedo);
     p.optimizer.method = epsm_core::Method::L2;
+    p.passes.spp_grad = 32;
     let mut opt = Optimization::new(p).expect("setup");
     let g = opt.gradient().expect("gradient").0.grad[0];
     let h = 0.01;
@@ -133,7 +135,7 @@ true = 0.8
         "raising the albedo toward its true value lowers the loss: {g}"
     );
     assert!(
-        (g - fd).abs() < 0.02 * fd.abs(),
+        (g - fd).abs() < 0.05 * fd.abs(),
         "analytic {g} vs finite difference {fd}"
     );
 

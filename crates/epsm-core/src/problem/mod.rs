@@ -2,8 +2,8 @@
 //! the target, the loss, the optimizer and the output settings, loaded from
 //! a TOML problem file ([`desc`], `docs/problem-format.md`) or built in code.
 //!
-//! Every malformed field gives a located [`SceneError`] (file, line, dotted
-//! field) through [`OptimizeError::Render`]; nothing panics.
+//! Every malformed field gives a located [`epsm_render::SceneError`] (file, line, dotted
+//! field) through [`crate::OptimizeError::Render`]; nothing panics.
 //!
 //! ```toml
 //! scene_file = "../layout.toml"

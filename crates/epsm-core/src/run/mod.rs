@@ -242,7 +242,8 @@ impl Optimization {
     /// and the records it used.
     pub fn gradient(&self) -> OptResult<(GradientEval, Vec<PathRecord>)> {
         let use_ = self.schedule.paths_at(self.iteration);
-        let colour = ColourModel::new(&self.grad.table, &self.grad.scene);
+        let l2 = !self.schedule.loss_at(self.iteration).is_ot();
+        let colour = ColourModel::new(&self.grad.table, &self.grad.scene, l2);
         let level = record_level(&self.grad.table, &self.grad.scene, &colour, use_);
         let spp = self.problem.passes.spp_grad;
         let t0 = Instant::now();
@@ -252,10 +253,18 @@ impl Optimization {
             ..RenderOptions::from_scene(&self.grad.scene)
         };
         let (out, records) = render_recorded(&self.grad.scene, &opts, level, &|_| {});
+        // L2's gradient `2(c − c*)·dc/dθ` is biased when `c` and `dc/dθ` share
+        // samples (it then also lowers the variance): its `c` comes from an
+        // independent render.
+        let image = if l2 {
+            render_image(&self.grad.scene, spp, self.seed(2))
+        } else {
+            out.image.clone()
+        };
         let t1 = Instant::now();
         let loss = evaluate(
             self.schedule.loss_at(self.iteration),
-            &out.image,
+            &image,
             &self.target_match,
             self.problem.loss.lambda,
         )?;
