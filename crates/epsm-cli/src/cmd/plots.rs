@@ -82,6 +82,7 @@ fn draw_panel<DB: DrawingBackend>(
         .configure_mesh()
         .x_desc("wall-clock seconds")
         .y_desc(&panel.y_label)
+        .y_label_formatter(&|v| tick(*v))
         .label_style((FONT, 13))
         .draw()
         .map_err(e)?;
@@ -108,6 +109,16 @@ fn draw_panel<DB: DrawingBackend>(
         .draw()
         .map_err(e)?;
     Ok(())
+}
+
+/// A short tick label for a log axis.
+fn tick(v: f64) -> String {
+    if (1e-2..1e4).contains(&v.abs()) {
+        let s = format!("{v:.3}");
+        s.trim_end_matches('0').trim_end_matches('.').to_owned()
+    } else {
+        format!("{v:.0e}")
+    }
 }
 
 /// Writes an 8-bit RGB buffer as PNG atomically (temporary file, then rename).
