@@ -22,13 +22,27 @@ use crate::scene::Mesh;
 
 /// Reads the OBJ file at `path` into one mesh (not yet validated).
 pub fn load(path: &Path) -> Result<Mesh> {
+    let bytes = std::fs::read(path).map_err(|source| crate::error::Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    parse(&bytes, path)
+}
+
+/// Parses OBJ text into one mesh (not yet validated); `file` names it in
+/// errors. Material libraries are not opened.
+pub fn parse(bytes: &[u8], file: &Path) -> Result<Mesh> {
+    let path = file;
     let options = tobj::LoadOptions {
         single_index: true,
         triangulate: true,
         ignore_points: true,
         ignore_lines: true,
     };
-    let (models, _materials) = tobj::load_obj(path, &options)
+    let (models, _materials) =
+        tobj::load_obj_buf(&mut std::io::BufReader::new(bytes), &options, |_| {
+            Err(tobj::LoadError::OpenFileFailed)
+        })
         .map_err(|e| SceneError::new(path, "obj", format!("malformed OBJ: {e}")))?;
     let mut mesh = Mesh::default();
     for model in models {
