@@ -105,8 +105,7 @@ pub(crate) fn surface_point(
         .triangle(triangle)
         .map(|p| placement.world_from_object.transform_point3(p));
     let p = lerp3(p0, p1, p2);
-    let winding = (p1 - p0).as_dvec3().cross((p2 - p0).as_dvec3());
-    let mut ng = winding.try_normalize().unwrap_or(DVec3::Z).as_vec3();
+    let mut ng = unit_winding(p1 - p0, p2 - p0);
     let ns = if mesh.normals.is_empty() {
         ng
     } else {
@@ -125,6 +124,20 @@ pub(crate) fn surface_point(
         b0 * mesh.uvs[i0] + b1 * mesh.uvs[i1] + b2 * mesh.uvs[i2]
     };
     SurfacePoint { p, ng, ns, uv }
+}
+
+/// `normalize(e1 × e2)` in `f32`, or in `f64` when the cross product
+/// underflows or overflows `f32`; `+z` for a degenerate triangle.
+#[inline]
+fn unit_winding(e1: Vec3, e2: Vec3) -> Vec3 {
+    let w = e1.cross(e2);
+    let len2 = w.length_squared();
+    if len2 >= f32::MIN_POSITIVE && len2 < f32::MAX {
+        w / len2.sqrt()
+    } else {
+        let w = e1.as_dvec3().cross(e2.as_dvec3());
+        w.try_normalize().unwrap_or(DVec3::Z).as_vec3()
+    }
 }
 
 /// The exact surface point of a triangle at `(b1, b2)` and its derivatives

@@ -54,17 +54,22 @@ pub(crate) struct Blas {
 }
 
 impl Blas {
-    /// Builds the object-space BVH of `mesh`, ids = the mesh's triangle
-    /// indices; `None` when it has no hittable triangle.
+    /// Builds the object-space BVH of `mesh` (obvhs `very_fast_build`),
+    /// ids = the mesh's triangle indices; `None` when it has no hittable
+    /// triangle.
     pub fn build(mesh: &Mesh) -> Option<Self> {
         Self::from_triangles(
             (0..mesh.len() as u32).map(|tri| (tri, mesh.triangle(tri).map(Vec3A::from))),
+            BvhBuildParams::very_fast_build(),
         )
     }
 
-    /// Builds the BVH of `(id, vertices)` triangles, leaving out those
-    /// [`PackedTriangle::new`] rejects; `None` when none is left.
-    pub fn from_triangles(triangles: impl Iterator<Item = (u32, [Vec3A; 3])>) -> Option<Self> {
+    /// Builds the BVH of `(id, vertices)` triangles with `params`, leaving
+    /// out those [`PackedTriangle::new`] rejects; `None` when none is left.
+    pub fn from_triangles(
+        triangles: impl Iterator<Item = (u32, [Vec3A; 3])>,
+        params: BvhBuildParams,
+    ) -> Option<Self> {
         let mut packed = Vec::new();
         let mut ids = Vec::new();
         let mut tris = Vec::new();
@@ -78,11 +83,7 @@ impl Blas {
         if packed.is_empty() {
             return None;
         }
-        let bvh = build_cwbvh_from_tris(
-            &tris,
-            BvhBuildParams::very_fast_build(),
-            &mut Duration::default(),
-        );
+        let bvh = build_cwbvh_from_tris(&tris, params, &mut Duration::default());
         let triangles: Vec<PackedTriangle> = bvh
             .primitive_indices
             .iter()

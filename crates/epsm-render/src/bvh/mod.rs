@@ -319,12 +319,21 @@ impl Accel {
     /// cached `f32` transform of the hit object.
     pub fn surface_point(&self, objects: &[Object], hit: &Hit) -> SurfacePoint {
         let object = &objects[hit.object as usize];
-        let index = self.instance_of_object[hit.object as usize];
-        let cached = self.instances.get(index as usize).and_then(|i| i.placement);
-        let placement = cached
-            .or_else(|| hit::Placement::new(&object.world_from_object))
-            .unwrap_or(hit::Placement::IDENTITY);
-        hit::surface_point(&object.mesh, &placement, hit.triangle, hit.b1, hit.b2)
+        let cached = self
+            .instance_of_object
+            .get(hit.object as usize)
+            .and_then(|&index| self.instances.get(index as usize))
+            .and_then(|i| i.placement.as_ref());
+        let at = |placement: &hit::Placement| {
+            hit::surface_point(&object.mesh, placement, hit.triangle, hit.b1, hit.b2)
+        };
+        match cached {
+            Some(placement) => at(placement),
+            None => {
+                at(&hit::Placement::new(&object.world_from_object)
+                    .unwrap_or(hit::Placement::IDENTITY))
+            }
+        }
     }
 
     /// World-space bounds of all placed geometry (`None` without any).

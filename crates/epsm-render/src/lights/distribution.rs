@@ -7,6 +7,10 @@
 
 use glam::Vec2;
 
+/// Tables with at most this many cumulative entries are searched by a
+/// branch-free count instead of a binary search.
+const LINEAR_SEARCH_MAX: usize = 17;
+
 /// A discrete choice: the index, its probability and the uniform number
 /// re-stretched to `[0, 1)` within the chosen entry (reusable for a further
 /// independent choice).
@@ -85,7 +89,13 @@ impl Distribution1D {
         // The entry i with cdf[i] ≤ u < cdf[i + 1]; zero-weight entries have an
         // empty interval and are skipped.
         let u = u.clamp(0.0, 1.0);
-        let upper = self.cdf.partition_point(|&c| c <= u);
+        let upper = if self.cdf.len() <= LINEAR_SEARCH_MAX {
+            // The same index as the binary search, without its unpredictable
+            // branches (light and triangle selection over a few entries).
+            self.cdf.iter().map(|&c| usize::from(c <= u)).sum()
+        } else {
+            self.cdf.partition_point(|&c| c <= u)
+        };
         let mut index = upper.saturating_sub(1).min(self.func.len() - 1);
         while self.func[index] == 0.0 && index > 0 {
             index -= 1;
