@@ -132,7 +132,7 @@ pub(crate) fn surface_point(
 fn unit_winding(e1: Vec3, e2: Vec3) -> Vec3 {
     let w = e1.cross(e2);
     let len2 = w.length_squared();
-    if len2 >= f32::MIN_POSITIVE && len2 < f32::MAX {
+    if (f32::MIN_POSITIVE..f32::MAX).contains(&len2) {
         w / len2.sqrt()
     } else {
         let w = e1.as_dvec3().cross(e2.as_dvec3());
