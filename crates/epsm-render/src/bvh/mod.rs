@@ -253,12 +253,14 @@ impl Accel {
     }
 
     /// The closest hit with `t` in `[ray.t_min, ray.t_max]`.
+    #[inline(always)]
     pub fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
         self.trace::<false>(ray)
     }
 
     /// Whether anything lies within `[ray.t_min, ray.t_max]` (stops at the
     /// first hit found).
+    #[inline(always)]
     pub fn occluded(&self, ray: &Ray) -> bool {
         self.trace::<true>(ray).is_some()
     }
@@ -317,6 +319,7 @@ impl Accel {
 
     /// The shading point of `hit` (unit normals, world space), from the
     /// cached `f32` transform of the hit object.
+    #[inline(always)]
     pub fn surface_point(&self, objects: &[Object], hit: &Hit) -> SurfacePoint {
         let object = &objects[hit.object as usize];
         let cached = self

@@ -29,7 +29,10 @@ fn mis(a: f32, b: f32) -> f32 {
     if a2 + b2 > 0.0 { a2 / (a2 + b2) } else { 0.0 }
 }
 
-/// Traces a path from a camera ray; returns its radiance.
+/// Traces a path from a camera ray; returns its radiance. Always inlined,
+/// as are the BVH queries it makes, so the AVX2 build of the tile loop
+/// compiles them too.
+#[inline(always)]
 pub(super) fn trace_path(
     scene: &Scene,
     opts: &RenderOptions,
