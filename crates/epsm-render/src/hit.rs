@@ -90,7 +90,9 @@ impl Placement {
 }
 
 /// The shading point of triangle `triangle` of `mesh` at `(b1, b2)`, placed by
-/// `placement`. All normals unit and finite.
+/// `placement`. All normals unit and finite. Always inlined (see
+/// `tracer::render_tile_avx2`).
+#[inline(always)]
 pub(crate) fn surface_point(
     mesh: &Mesh,
     placement: &Placement,

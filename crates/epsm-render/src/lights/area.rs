@@ -112,6 +112,7 @@ impl AreaEmitter {
 
     /// A uniform point on the object: `u_triangle` picks the triangle by area,
     /// `u` the point on it.
+    #[inline(always)]
     pub fn sample(&self, u_triangle: f64, u: Vec2) -> Option<AreaPoint> {
         let pick = self.by_area.as_ref()?.sample_discrete(u_triangle);
         let [p0, p1, p2] = self.triangles[pick.index];

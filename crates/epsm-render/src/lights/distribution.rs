@@ -85,6 +85,7 @@ impl Distribution1D {
     }
 
     /// Chooses an entry with probability proportional to its weight.
+    #[inline(always)]
     pub fn sample_discrete(&self, u: f64) -> DiscreteSample {
         // The entry i with cdf[i] ≤ u < cdf[i + 1]; zero-weight entries have an
         // empty interval and are skipped.

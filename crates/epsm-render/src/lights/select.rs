@@ -88,6 +88,8 @@ impl LightTable {
 
     /// Samples a light point as seen from `p`. `None` when there is no light
     /// or the sample carries no energy (e.g. `p` behind an area light).
+    /// Always inlined (see `tracer::render_tile_avx2`).
+    #[inline(always)]
     pub fn sample(&self, p: Vec3, u_select: f32, u: Vec2) -> Option<LightSample> {
         let pick = self.selection.as_ref()?.sample_discrete(u_select as f64);
         let n_area = self.area.len();
