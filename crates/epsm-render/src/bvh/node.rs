@@ -64,24 +64,16 @@ impl TraceRay {
     /// Prepares `origin + t·dir`, `t` in `[t_min, t_max]`.
     #[inline(always)]
     pub fn new(origin: Vec3A, dir: Vec3A, t_min: f32, t_max: f32) -> Self {
-        let neg = [dir.x < 0.0, dir.y < 0.0, dir.z < 0.0];
-        let clamp = |d: f32, n: bool| {
-            if d.abs() >= TINY_DIR {
-                d
-            } else if n {
-                -TINY_DIR
-            } else {
-                TINY_DIR
-            }
-        };
-        let safe = Vec3A::new(
-            clamp(dir.x, neg[0]),
-            clamp(dir.y, neg[1]),
-            clamp(dir.z, neg[2]),
-        );
-        let oct_inv4 = (if neg[0] { 0 } else { 0x0404_0404 })
-            | (if neg[1] { 0 } else { 0x0202_0202 })
-            | (if neg[2] { 0 } else { 0x0101_0101 });
+        // Branch-free: a per-ray branch on the octant mispredicts.
+        let neg = dir.cmplt(Vec3A::ZERO);
+        let tiny = Vec3A::select(neg, Vec3A::splat(-TINY_DIR), Vec3A::splat(TINY_DIR));
+        let safe = Vec3A::select(dir.abs().cmpge(Vec3A::splat(TINY_DIR)), dir, tiny);
+        let bits = neg.bitmask();
+        let near = [bits & 1, (bits >> 1) & 1, (bits >> 2) & 1].map(|b| b as usize);
+        let pos = !bits & 7;
+        let oct_inv4 = ((pos & 1) * 0x0404_0404)
+            | (((pos >> 1) & 1) * 0x0202_0202)
+            | ((pos >> 2) * 0x0101_0101);
         let inv = safe.recip();
         Self {
             origin,
@@ -89,7 +81,7 @@ impl TraceRay {
             shear: RayShear::new(dir),
             origin4: [0, 1, 2].map(|a| Vec4::splat(origin[a])),
             inv_dir4: [0, 1, 2].map(|a| Vec4::splat(inv[a])),
-            near: neg.map(usize::from),
+            near,
             t_min,
             t_max,
             oct_inv4,

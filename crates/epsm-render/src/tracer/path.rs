@@ -203,6 +203,7 @@ struct NextEvent {
 
 /// Samples a light, evaluates the BSDF toward it, MIS-weights against BSDF
 /// sampling and traces the shadow ray. Consumes three random numbers.
+#[inline(always)]
 fn next_event(
     scene: &Scene,
     at: &Shading<'_>,
