@@ -169,9 +169,11 @@ fn verify_hit(objects: &[Object], ray: &Ray, h: &Hit, unit: f64, i: usize) {
 fn random_scenes_match_brute_force() {
     let mut rng = Rng(7);
     let mut certain = 0;
-    for _ in 0..4 {
+    for round in 0..4 {
         let objects = random_scene(&mut rng);
-        let accel = Accel::build(&objects);
+        // Everything static (one world-space BVH), or a mix with instances.
+        let dynamic: &[u32] = if round % 2 == 0 { &[] } else { &[0, 2, 3] };
+        let accel = Accel::build_with_dynamic(&objects, dynamic);
         certain += check_against_brute_force(&mut rng, &objects, &accel, 2000);
     }
     eprintln!("certain hits: {certain}");
@@ -200,7 +202,7 @@ fn tiny_and_huge_scenes_match_brute_force() {
 fn moved_instances_match_brute_force_without_new_blas() {
     let mut rng = Rng(11);
     let mut objects = random_scene(&mut rng);
-    let mut accel = Accel::build(&objects);
+    let mut accel = Accel::build_with_dynamic(&objects, &[0, 2, 4, 5]);
     let before = accel.stats();
     for round in 0..4 {
         let ids = [0, 2, 4 + round % 2];
@@ -221,21 +223,59 @@ fn moved_instances_match_brute_force_without_new_blas() {
         (before.blas_count, before.triangles)
     );
     assert_eq!(
-        after.build_seconds, before.build_seconds,
+        (after.build_seconds, after.static_seconds),
+        (before.build_seconds, before.static_seconds),
         "update must not rebuild"
     );
+}
+
+#[test]
+fn moving_static_objects_makes_them_dynamic() {
+    let mut rng = Rng(23);
+    let mut objects = random_scene(&mut rng);
+    let mut accel = Accel::build(&objects);
+    let before = accel.stats();
+    // Object 3 (soup(20)) and object 1 (a grid shared with object 4) start static.
+    for id in [3, 1] {
+        objects[id].world_from_object = random_transform(&mut rng, false);
+        accel.update_instance(&objects, id as u32);
+        check_against_brute_force(&mut rng, &objects, &accel, 600);
+    }
+    let after = accel.stats();
+    assert_eq!(after.blas_count, before.blas_count + 2);
+    assert_eq!(after.triangles, before.triangles);
+    assert_eq!(after.degenerate_triangles, before.degenerate_triangles);
+    // Moving again touches no bottom level.
+    objects[3].world_from_object = random_transform(&mut rng, true);
+    accel.update_instance(&objects, 3);
+    assert_eq!(accel.stats().static_seconds, after.static_seconds);
+    check_against_brute_force(&mut rng, &objects, &accel, 600);
 }
 
 #[test]
 fn shared_meshes_share_blas_and_empty_meshes_are_skipped() {
     let mut rng = Rng(3);
     let objects = random_scene(&mut rng);
-    let stats = Accel::build(&objects).stats();
+    // All dynamic: one BVH per distinct mesh.
+    let stats = Accel::build_with_dynamic(&objects, &[0, 1, 2, 3, 4, 5, 6]).stats();
     assert_eq!(stats.blas_count, 3);
     assert_eq!(stats.objects, 6);
     // soup(200) and soup(20) have 50 and 6 repeated-vertex or collinear triangles.
     assert_eq!(stats.degenerate_triangles, 56);
     assert_eq!(stats.triangles, 200 + 20 + 72 - 56);
+    assert!(stats.bytes > 0);
+    // All static: one world-space BVH with every object's triangles.
+    let stats = Accel::build(&objects).stats();
+    assert_eq!(stats.blas_count, 1);
+    assert_eq!(stats.degenerate_triangles, 3 * 50 + 6);
+    assert_eq!(stats.triangles, 3 * 200 + 20 + 2 * 72 - 3 * 50 - 6);
+    // Copies of a large shared mesh stay instanced, static or not.
+    let big = Arc::new(bvh_util::cube_sphere(6));
+    let copies: Vec<Object> = (0..2)
+        .map(|k| object(format!("c{k}"), &big, random_transform(&mut rng, false)))
+        .collect();
+    let stats = Accel::build(&copies).stats();
+    assert_eq!((stats.blas_count, stats.triangles), (1, big.len()));
     assert!(stats.bytes > 0);
     let empty = Accel::build(&[object(
         "e".into(),

@@ -1,11 +1,14 @@
 //! `epsm bench render`: samples and rays per second on scene files, with
-//! 1 and all threads, BVH build time and peak memory.
+//! 1 and all threads (per wall-clock and per CPU second), BVH build time
+//! and peak memory.
 
 use std::path::PathBuf;
 use std::time::Instant;
 
 use epsm_render::scene::load::load_scene;
 use epsm_render::tracer::{RenderOptions, render};
+
+use super::bench_rays::cpu_seconds;
 
 /// Arguments of `epsm bench render`.
 #[derive(clap::Args, Debug)]
@@ -38,20 +41,33 @@ pub fn run(args: &RenderBenchArgs) -> anyhow::Result<()> {
         opts.spp = args.spp.unwrap_or(opts.spp);
         opts.max_depth = args.max_depth.unwrap_or(opts.max_depth);
         let mut results = Vec::new();
-        for threads in [1, cores] {
-            let mut best: Option<epsm_render::tracer::RenderOutput> = None;
+        let thread_counts = [1, cores];
+        // All pools live to the end: a thread exiting mid-measurement would
+        // take its CPU time out of the process total.
+        let pools = thread_counts
+            .iter()
+            .map(|&n| rayon::ThreadPoolBuilder::new().num_threads(n).build())
+            .collect::<Result<Vec<_>, _>>()?;
+        for (&threads, pool) in thread_counts.iter().zip(&pools) {
+            let mut best: Option<(epsm_render::tracer::RenderOutput, Option<f64>)> = None;
             for _ in 0..args.repeats.max(1) {
-                let out = super::with_threads(Some(threads), || render(&scene, &opts, &|_| {}))?;
-                if best.as_ref().is_none_or(|b| out.seconds < b.seconds) {
-                    best = Some(out);
+                let start = cpu_seconds();
+                let out = pool.install(|| render(&scene, &opts, &|_| {}));
+                let cpu = cpu_seconds()
+                    .zip(start)
+                    .map(|(end, start)| end - start)
+                    .filter(|&c| c > 0.0);
+                if best.as_ref().is_none_or(|(b, _)| out.seconds < b.seconds) {
+                    best = Some((out, cpu));
                 }
             }
-            if let Some(b) = best {
+            if let Some((b, cpu)) = best {
                 let rays = (b.counters.rays + b.counters.shadow_rays) as f64;
                 results.push(serde_json::json!({
                     "threads": threads,
                     "seconds": b.seconds,
                     "samples_per_s": b.samples as f64 / b.seconds,
+                    "samples_per_cpu_s": cpu.map(|c| b.samples as f64 / c),
                     "rays_per_s": rays / b.seconds,
                     "rays_per_sample": rays / b.samples as f64,
                 }));

@@ -1,7 +1,7 @@
-//! Bottom level: one compressed wide BVH (CWBVH, obvhs) per distinct mesh,
-//! in object space, with the mesh's triangles packed for intersection and
-//! reordered by the BVH's `primitive_indices` so a leaf slot indexes them
-//! directly.
+//! Bottom level: a compressed wide BVH (CWBVH, obvhs) over triangles (one
+//! per instanced mesh in object space, and one over the static objects in
+//! world space), with the triangles packed for intersection and reordered by
+//! the BVH's `primitive_indices` so a leaf slot indexes them directly.
 //!
 //! Model: PLOC build with light reinsertion, collapsed to an 8-wide BVH with
 //! at most three triangles per leaf (obvhs `BvhBuildParams::very_fast_build`).
@@ -43,27 +43,35 @@ pub(crate) struct SlotHit {
     pub b2: f32,
 }
 
-/// One mesh's BVH and packed triangles.
+/// A BVH over packed triangles, each tagged with a caller-chosen id.
 #[derive(Clone, Debug)]
 pub(crate) struct Blas {
     bvh: WideBvh,
     triangles: Vec<PackedTriangle>,
-    triangle_ids: Vec<u32>,
-    /// Object-space bounds of the hittable triangles.
+    ids: Vec<u32>,
+    /// Bounds of the hittable triangles.
     pub bounds: Aabb,
 }
 
 impl Blas {
-    /// Builds the BVH of `mesh`; `None` when it has no hittable triangle.
+    /// Builds the object-space BVH of `mesh`, ids = the mesh's triangle
+    /// indices; `None` when it has no hittable triangle.
     pub fn build(mesh: &Mesh) -> Option<Self> {
-        let mut packed = Vec::with_capacity(mesh.len());
-        let mut ids = Vec::with_capacity(mesh.len());
-        let mut tris = Vec::with_capacity(mesh.len());
-        for tri in 0..mesh.len() as u32 {
-            let [v0, v1, v2] = mesh.triangle(tri).map(Vec3A::from);
+        Self::from_triangles(
+            (0..mesh.len() as u32).map(|tri| (tri, mesh.triangle(tri).map(Vec3A::from))),
+        )
+    }
+
+    /// Builds the BVH of `(id, vertices)` triangles, leaving out those
+    /// [`PackedTriangle::new`] rejects; `None` when none is left.
+    pub fn from_triangles(triangles: impl Iterator<Item = (u32, [Vec3A; 3])>) -> Option<Self> {
+        let mut packed = Vec::new();
+        let mut ids = Vec::new();
+        let mut tris = Vec::new();
+        for (id, [v0, v1, v2]) in triangles {
             if let Some(p) = PackedTriangle::new([v0, v1, v2]) {
                 packed.push(p);
-                ids.push(tri);
+                ids.push(id);
                 tris.push(Triangle { v0, v1, v2 });
             }
         }
@@ -80,7 +88,7 @@ impl Blas {
             .iter()
             .map(|&i| packed[i as usize])
             .collect();
-        let triangle_ids = bvh
+        let ids = bvh
             .primitive_indices
             .iter()
             .map(|&i| ids[i as usize])
@@ -90,27 +98,25 @@ impl Blas {
         Some(Self {
             bvh,
             triangles,
-            triangle_ids,
+            ids,
             bounds,
         })
     }
 
     /// Number of hittable triangles.
     pub fn len(&self) -> usize {
-        self.triangle_ids.len()
+        self.ids.len()
     }
 
-    /// The mesh's triangle index of a leaf slot.
+    /// The id of the triangle in a leaf slot.
     #[inline(always)]
-    pub fn triangle_id(&self, slot: u32) -> u32 {
-        self.triangle_ids[slot as usize]
+    pub fn id(&self, slot: u32) -> u32 {
+        self.ids[slot as usize]
     }
 
     /// Approximate heap size in bytes.
     pub fn bytes(&self) -> usize {
-        self.bvh.bytes()
-            + self.triangles.len() * size_of::<PackedTriangle>()
-            + self.triangle_ids.len() * 4
+        self.bvh.bytes() + self.triangles.len() * size_of::<PackedTriangle>() + self.ids.len() * 4
     }
 
     /// Traces the object-space `ray` with traversal state `state` (reused

@@ -1,14 +1,25 @@
 //! Two-level BVH over the scene's objects (obvhs CWBVH at both levels).
 //!
-//! One bottom-level BVH per distinct mesh (objects sharing an `Arc<Mesh>`
-//! share it), built in object space; one top-level BVH over the instances'
-//! world boxes. A ray is traced into an instance by mapping it to object space
-//! with the cached `f32` `object_from_world` *without* normalising the
-//! direction, so the ray parameter `t` is the same at both levels and in
-//! [`Hit::t`]. Moving one object ([`Accel::update_instance`]) re-reads its
-//! transform and rebuilds only the top level. Objects with empty meshes (or
-//! only zero-area triangles) and objects with singular transforms are never
-//! hit.
+//! Static objects (all objects not made dynamic, except copies of a large
+//! shared mesh) are traced through one bottom-level BVH over their
+//! world-space triangles ([`world`]), with no top level and no transform.
+//! Dynamic objects and instanced large meshes get one bottom-level BVH per
+//! distinct mesh (objects sharing an `Arc<Mesh>` share it), built in object
+//! space, behind a top-level BVH over their world boxes. A ray is traced into
+//! an instance by mapping it to object space with the cached `f32`
+//! `object_from_world` *without* normalising the direction, so the ray
+//! parameter `t` is the same at both levels and in [`Hit::t`].
+//!
+//! Moving an object ([`Accel::update_instance`]) re-reads its transform and
+//! rebuilds only the top level; the first move of a static object makes it
+//! dynamic, which rebuilds the static BVH once without it
+//! ([`Accel::update_instances`] on the objects that will move, before
+//! moving them, does that up front). Objects with empty meshes (or only
+//! zero-area triangles) and objects with singular transforms are never hit.
+//!
+//! | constant | value | meaning |
+//! |---|---|---|
+//! | `MAX_MERGED_SHARED` | 1024 | a static object whose mesh other objects share is merged into the static BVH only up to this many triangles |
 //!
 //! No parameters.
 
@@ -16,6 +27,7 @@ mod blas;
 mod node;
 mod tlas;
 mod triangle;
+mod world;
 
 use std::collections::HashMap;
 use std::fmt;
@@ -23,6 +35,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use glam::{DVec3, UVec2, Vec3A};
+use obvhs::aabb::Aabb;
 use obvhs::cwbvh::Traversal;
 
 use crate::hit::{self, Hit, SurfacePoint};
@@ -30,19 +43,26 @@ use crate::ray::Ray;
 use crate::scene::{Mesh, Object, ObjectId};
 use blas::{Blas, SlotHit};
 use node::TraceRay;
-use tlas::{Instance, Tlas};
+use tlas::{Instance, Tlas, Traced};
+use triangle::PackedTriangle;
+use world::WorldBlas;
 
 /// Marks an object without an instance.
 const NO_INSTANCE: u32 = u32::MAX;
+
+/// Copies of a shared mesh with more triangles than this stay instanced
+/// (merging them would copy the mesh once per object).
+const MAX_MERGED_SHARED: usize = 1024;
 
 /// Size and build cost of an [`Accel`].
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct AccelStats {
     /// Objects with an instance (non-empty mesh).
     pub objects: usize,
-    /// Bottom-level BVHs (distinct non-empty meshes).
+    /// Bottom-level BVHs (distinct instanced meshes, plus the static one).
     pub blas_count: usize,
-    /// Hittable triangles summed over the bottom levels (shared meshes once).
+    /// Hittable triangles summed over the bottom levels (instanced meshes
+    /// once, static objects once each).
     pub triangles: usize,
     /// Triangles left out for zero area or non-finite vertices.
     pub degenerate_triangles: usize,
@@ -50,14 +70,18 @@ pub struct AccelStats {
     pub build_seconds: f64,
     /// Time of the last top-level build, seconds.
     pub tlas_seconds: f64,
+    /// Time of the last build of the static BVH, seconds.
+    pub static_seconds: f64,
     /// Approximate heap size, bytes.
     pub bytes: usize,
 }
 
-/// Per-mesh BVHs and a top level over their instances. Cloning is cheap in
-/// the bottom levels (shared, immutable); `Debug` prints the statistics only.
+/// The static world-space BVH, per-mesh BVHs and a top level over their
+/// instances. Cloning is cheap in the BVHs (shared, immutable); `Debug`
+/// prints the statistics only.
 #[derive(Clone, Default)]
 pub struct Accel {
+    world: Option<Arc<WorldBlas>>,
     blases: Vec<Arc<Blas>>,
     instances: Vec<Instance>,
     instance_of_object: Vec<u32>,
@@ -73,75 +97,151 @@ impl fmt::Debug for Accel {
     }
 }
 
+/// The BVH a trace's best hit so far lies in.
+#[derive(Clone, Copy, Debug)]
+enum Found<'a> {
+    /// No hit yet.
+    Nothing,
+    /// The static BVH.
+    World(&'a WorldBlas),
+    /// The BVH of an instance of this object.
+    Instance(ObjectId, &'a Blas),
+}
+
 impl Accel {
-    /// Builds one BVH per distinct mesh and the top level.
+    /// Builds the acceleration structure with every object static (see
+    /// [`Accel::build_with_dynamic`]).
     pub fn build(objects: &[Object]) -> Self {
+        Self::build_with_dynamic(objects, &[])
+    }
+
+    /// Builds the static world-space BVH, one BVH per distinct instanced
+    /// mesh and the top level; objects `dynamic` are instanced (moving them
+    /// rebuilds only the top level).
+    pub fn build_with_dynamic(objects: &[Object], dynamic: &[ObjectId]) -> Self {
         let start = Instant::now();
         let mut accel = Self {
             instance_of_object: vec![NO_INSTANCE; objects.len()],
             ..Self::default()
         };
-        let mut blas_of_mesh: HashMap<*const Mesh, Option<u32>> = HashMap::new();
-        let mut all = 0;
+        let mut users: HashMap<*const Mesh, usize> = HashMap::new();
+        for object in objects {
+            *users.entry(Arc::as_ptr(&object.mesh)).or_default() += 1;
+        }
         for (id, object) in objects.iter().enumerate() {
-            let blases = &mut accel.blases;
-            let all = &mut all;
-            let blas = *blas_of_mesh
-                .entry(Arc::as_ptr(&object.mesh))
-                .or_insert_with(|| {
-                    *all += object.mesh.len();
-                    let built = Blas::build(&object.mesh)?;
-                    blases.push(Arc::new(built));
-                    Some(blases.len() as u32 - 1)
-                });
-            if let Some(blas) = blas {
-                let local = &accel.blases[blas as usize].bounds;
+            let shared_large =
+                users[&Arc::as_ptr(&object.mesh)] > 1 && object.mesh.len() > MAX_MERGED_SHARED;
+            let placed = if shared_large || dynamic.contains(&(id as ObjectId)) {
+                accel.blas_of(objects, id as ObjectId)
+            } else {
+                let local = mesh_bounds(&object.mesh);
+                (local.min.cmple(local.max).all()).then_some((Traced::World, local))
+            };
+            if let Some((traced, local)) = placed {
                 accel.instance_of_object[id] = accel.instances.len() as u32;
                 accel.instances.push(Instance::new(
                     id as ObjectId,
-                    blas,
+                    traced,
                     local,
                     &object.world_from_object,
                 ));
             }
         }
-        let hittable: usize = accel.blases.iter().map(|b| b.len()).sum();
-        accel.stats.degenerate_triangles = all - hittable;
+        accel.rebuild_world(objects);
         accel.rebuild_tlas();
         accel.stats.build_seconds = start.elapsed().as_secs_f64();
         accel
     }
 
+    /// The bottom-level BVH of object `id`'s mesh (built unless an instance
+    /// already has it) and its bounds; `None` without hittable triangles.
+    fn blas_of(&mut self, objects: &[Object], id: ObjectId) -> Option<(Traced, Aabb)> {
+        let mesh = &objects[id as usize].mesh;
+        let existing = self.instances.iter().find_map(|i| match i.traced {
+            Traced::Blas(b) if Arc::ptr_eq(&objects[i.object as usize].mesh, mesh) => Some(b),
+            _ => None,
+        });
+        let index = match existing {
+            Some(b) => b,
+            None => {
+                self.blases.push(Arc::new(Blas::build(mesh)?));
+                self.blases.len() as u32 - 1
+            }
+        };
+        Some((Traced::Blas(index), self.blases[index as usize].bounds))
+    }
+
     /// Re-reads object `id`'s transform and rebuilds the top level (no
-    /// bottom-level BVH is touched). Ids without an instance are ignored. The
-    /// object's mesh must be the one the BVH was built with.
+    /// bottom-level BVH is touched once the object is dynamic). Ids without
+    /// an instance are ignored. The object's mesh must be the one the BVH was
+    /// built with.
     pub fn update_instance(&mut self, objects: &[Object], id: ObjectId) {
         self.update_instances(objects, &[id]);
     }
 
     /// [`Accel::update_instance`] for several objects with one top-level
     /// rebuild (moving many objects at once costs one rebuild, not one each).
+    /// Static objects among `ids` become dynamic: the static BVH is rebuilt
+    /// once without them.
     pub fn update_instances(&mut self, objects: &[Object], ids: &[ObjectId]) {
+        let mut world_changed = false;
         for &id in ids {
             let Some(&index) = self.instance_of_object.get(id as usize) else {
                 continue;
             };
-            if let Some(instance) = self.instances.get_mut(index as usize) {
-                let local = &self.blases[instance.blas as usize].bounds;
-                instance.place(local, &objects[id as usize].world_from_object);
+            let Some(traced) = self.instances.get(index as usize).map(|i| i.traced) else {
+                continue;
+            };
+            if traced == Traced::World
+                && let Some((traced, local)) = self.blas_of(objects, id)
+            {
+                let instance = &mut self.instances[index as usize];
+                (instance.traced, instance.local) = (traced, local);
+                world_changed = true;
             }
+            self.instances[index as usize].place(&objects[id as usize].world_from_object);
+        }
+        if world_changed {
+            self.rebuild_world(objects);
         }
         self.rebuild_tlas();
+    }
+
+    fn rebuild_world(&mut self, objects: &[Object]) {
+        let start = Instant::now();
+        let members: Vec<ObjectId> = self
+            .instances
+            .iter()
+            .filter(|i| i.traced == Traced::World && i.placement.is_some())
+            .map(|i| i.object)
+            .collect();
+        self.world = WorldBlas::build(objects, &members).map(Arc::new);
+        self.stats.static_seconds = start.elapsed().as_secs_f64();
+        let mut degenerate = self.world.as_ref().map_or(0, |w| w.left_out);
+        let mut counted: Vec<u32> = Vec::new();
+        for instance in &self.instances {
+            if let Traced::Blas(b) = instance.traced
+                && !counted.contains(&b)
+            {
+                counted.push(b);
+                let mesh = &objects[instance.object as usize].mesh;
+                degenerate += mesh.len() - self.blases[b as usize].len();
+            }
+        }
+        self.stats.degenerate_triangles = degenerate;
     }
 
     fn rebuild_tlas(&mut self) {
         let start = Instant::now();
         self.tlas = Tlas::build(&self.instances);
         self.stats.tlas_seconds = start.elapsed().as_secs_f64();
+        let world = self.world.as_deref();
         self.stats.objects = self.instances.len();
-        self.stats.blas_count = self.blases.len();
-        self.stats.triangles = self.blases.iter().map(|b| b.len()).sum();
+        self.stats.blas_count = self.blases.len() + usize::from(world.is_some());
+        self.stats.triangles =
+            self.blases.iter().map(|b| b.len()).sum::<usize>() + world.map_or(0, |w| w.blas.len());
         self.stats.bytes = self.blases.iter().map(|b| b.bytes()).sum::<usize>()
+            + world.map_or(0, WorldBlas::bytes)
             + self.tlas.bytes()
             + self.instances.len() * size_of::<Instance>()
             + self.instance_of_object.len() * 4;
@@ -163,13 +263,11 @@ impl Accel {
         self.trace::<true>(ray).is_some()
     }
 
-    /// Traces `ray` through both levels: the closest hit, or with `ANY` the
-    /// first hit found (whose barycentrics are then meaningless).
+    /// Traces `ray` through the static BVH and then the top level: the
+    /// closest hit, or with `ANY` the first hit found (whose barycentrics are
+    /// then meaningless).
     #[inline(always)]
     fn trace<const ANY: bool>(&self, ray: &Ray) -> Option<Hit> {
-        if self.tlas.slots.is_empty() {
-            return None;
-        }
         let mut world = TraceRay::new(
             Vec3A::from(ray.origin),
             Vec3A::from(ray.dir),
@@ -177,14 +275,26 @@ impl Accel {
             ray.t_max,
         );
         let mut best = SlotHit::default();
-        let mut best_instance = NO_INSTANCE;
-        let mut state = self.tlas.bvh.traversal(&world);
+        let mut found = Found::Nothing;
+        let mut state = Traversal::default();
+        if let Some(statics) = self.world.as_deref()
+            && statics.blas.trace::<ANY>(&mut world, &mut state, &mut best)
+        {
+            found = Found::World(statics);
+            if ANY || self.tlas.slots.is_empty() {
+                return hit(found, best, world.t_max);
+            }
+        }
+        if self.tlas.slots.is_empty() {
+            return None;
+        }
         let mut blas_state = Traversal::default();
+        state.reinit(world.dir);
         let mut node;
         obvhs::traverse!(self.tlas.bvh, node, state, node.intersect(&world), {
             let index = self.tlas.slots[state.primitive_id as usize];
             let instance = &self.instances[index as usize];
-            if let Some(placement) = &instance.placement {
+            if let (Some(placement), Traced::Blas(blas)) = (&instance.placement, instance.traced) {
                 let to_object = &placement.object_from_world;
                 let mut local = TraceRay::new(
                     to_object.transform_point3a(world.origin),
@@ -192,33 +302,17 @@ impl Accel {
                     world.t_min,
                     world.t_max,
                 );
-                if self.blases[instance.blas as usize].trace::<ANY>(
-                    &mut local,
-                    &mut blas_state,
-                    &mut best,
-                ) {
+                let bvh = &*self.blases[blas as usize];
+                if bvh.trace::<ANY>(&mut local, &mut blas_state, &mut best) {
+                    found = Found::Instance(instance.object, bvh);
                     if ANY {
-                        return Some(self.hit(index, best, local.t_max));
+                        return hit(found, best, local.t_max);
                     }
                     world.t_max = local.t_max;
-                    best_instance = index;
                 }
             }
         });
-        (best_instance != NO_INSTANCE).then(|| self.hit(best_instance, best, world.t_max))
-    }
-
-    /// The [`Hit`] of a bottom-level hit in instance `index` at `t`.
-    #[inline(always)]
-    fn hit(&self, index: u32, best: SlotHit, t: f32) -> Hit {
-        let instance = &self.instances[index as usize];
-        Hit {
-            object: instance.object,
-            triangle: self.blases[instance.blas as usize].triangle_id(best.slot),
-            b1: best.b1,
-            b2: best.b2,
-            t,
-        }
+        hit(found, best, world.t_max)
     }
 
     /// The shading point of `hit` (unit normals, world space), from the
@@ -241,4 +335,31 @@ impl Accel {
             .map(|i| (i.bounds[0], i.bounds[1]))
             .reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)))
     }
+}
+
+/// The [`Hit`] of bottom-level hit `best` in `found` at `t`.
+#[inline(always)]
+fn hit(found: Found<'_>, best: SlotHit, t: f32) -> Option<Hit> {
+    let (object, triangle) = match found {
+        Found::Nothing => return None,
+        Found::World(world) => {
+            let source = world.source(best.slot);
+            (source.object, source.triangle)
+        }
+        Found::Instance(object, blas) => (object, blas.id(best.slot)),
+    };
+    Some(Hit {
+        object,
+        triangle,
+        b1: best.b1,
+        b2: best.b2,
+        t,
+    })
+}
+
+/// Object-space bounds of the hittable triangles of `mesh` (empty without).
+fn mesh_bounds(mesh: &Mesh) -> Aabb {
+    (0..mesh.len() as u32)
+        .filter_map(|tri| PackedTriangle::new(mesh.triangle(tri).map(Vec3A::from)))
+        .fold(Aabb::empty(), |b, t| b.union(&t.aabb()))
 }

@@ -22,8 +22,8 @@
 
 use glam::{Vec3A, Vec4};
 use obvhs::aabb::Aabb;
+use obvhs::cwbvh::CwBvh;
 use obvhs::cwbvh::node::{CwBvhNode, extract_byte64};
-use obvhs::cwbvh::{CwBvh, Traversal};
 
 use super::triangle::RayShear;
 
@@ -209,14 +209,6 @@ impl WideBvh {
                 .map(|(node, children)| WideNode::new(node, children))
                 .collect(),
         }
-    }
-
-    /// Fresh traversal state for `ray`, starting at the root.
-    #[inline(always)]
-    pub fn traversal(&self, ray: &TraceRay) -> Traversal {
-        let mut state = Traversal::default();
-        state.reinit(ray.dir);
-        state
     }
 
     /// Heap size in bytes.

@@ -1,5 +1,6 @@
-//! Top level: instances (an object's placement of a shared bottom-level BVH)
-//! and a CWBVH over their world-space bounds.
+//! Top level: instances (an object's placement, traced either through its
+//! mesh's own bottom-level BVH or as part of the static world-space BVH) and a
+//! CWBVH over the world-space bounds of those with their own BVH.
 //!
 //! Model: an instance's world box is the box of the eight transformed corners
 //! of its mesh's object-space box, computed in `f64` and padded outwards by a
@@ -35,37 +36,54 @@ use crate::scene::ObjectId;
 /// Relative padding of instance boxes.
 const PAD: f64 = 1e-5;
 
-/// One placed bottom-level BVH.
+/// Where an instance's triangles are traced.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Traced {
+    /// In the static world-space BVH.
+    World,
+    /// Through bottom-level BVH `index` of its mesh, behind the top level.
+    Blas(u32),
+}
+
+/// One placed object with hittable triangles.
 #[derive(Clone, Debug)]
 pub(crate) struct Instance {
     /// The object it places.
     pub object: ObjectId,
-    /// Index of its bottom-level BVH.
-    pub blas: u32,
+    /// Where its triangles are traced.
+    pub traced: Traced,
+    /// Object-space bounds of its hittable triangles.
+    pub local: Aabb,
     /// Its `f32` placement; `None` while the transform is singular (the
-    /// instance is then left out of the top level).
+    /// instance is then never hit).
     pub placement: Option<Placement>,
     /// World-space bounds, `f64` (unpadded); meaningful with a placement.
     pub bounds: [DVec3; 2],
 }
 
 impl Instance {
-    /// Places `object`'s BVH `blas` with object-space bounds `local` by `world_from_object`.
-    pub fn new(object: ObjectId, blas: u32, local: &Aabb, world_from_object: &DAffine3) -> Self {
+    /// Places `object` (traced as `traced`, object-space bounds `local`) by `world_from_object`.
+    pub fn new(
+        object: ObjectId,
+        traced: Traced,
+        local: Aabb,
+        world_from_object: &DAffine3,
+    ) -> Self {
         let mut instance = Self {
             object,
-            blas,
+            traced,
+            local,
             placement: None,
             bounds: [DVec3::ZERO; 2],
         };
-        instance.place(local, world_from_object);
+        instance.place(world_from_object);
         instance
     }
 
     /// Re-reads the transform.
-    pub fn place(&mut self, local: &Aabb, world_from_object: &DAffine3) {
+    pub fn place(&mut self, world_from_object: &DAffine3) {
         self.placement = Placement::new(world_from_object);
-        let (lo, hi) = (local.min.as_dvec3(), local.max.as_dvec3());
+        let (lo, hi) = (self.local.min.as_dvec3(), self.local.max.as_dvec3());
         let mut bounds = [DVec3::INFINITY, DVec3::NEG_INFINITY];
         for corner in 0..8 {
             let pick = |bit: usize, a: f64, b: f64| if corner & bit == 0 { a } else { b };
@@ -102,10 +120,13 @@ pub(crate) struct Tlas {
 }
 
 impl Tlas {
-    /// Builds the top level over the placed instances.
+    /// Builds the top level over the placed instances with their own BVH.
     pub fn build(instances: &[Instance]) -> Self {
         let placed: Vec<u32> = (0..instances.len() as u32)
-            .filter(|&i| instances[i as usize].placement.is_some())
+            .filter(|&i| {
+                let instance = &instances[i as usize];
+                instance.placement.is_some() && instance.traced != Traced::World
+            })
             .collect();
         if placed.is_empty() {
             return Self::default();
