@@ -81,3 +81,47 @@ fn optimize_writes_parseable_reports_and_resumes() {
     assert!(String::from_utf8_lossy(&bad.stderr).contains("does-not-exist.toml"));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn compare_under_a_time_budget_stops_every_method_at_the_budget() {
+    let dir = std::env::temp_dir().join(format!("epsm-compare-cli-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = dir.to_str().expect("utf-8 path");
+    let problem = tiny();
+    let problem = problem.to_str().expect("utf-8");
+    // A budget far below one iteration's time: every method stops after its
+    // first iteration although 50 were asked for.
+    let run = epsm(&[
+        "compare",
+        problem,
+        "--methods",
+        "epsm,l2",
+        "--out",
+        out,
+        "--iterations",
+        "50",
+        "--time-budget",
+        "1e-9",
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    for method in ["epsm", "l2"] {
+        let csv = std::fs::read_to_string(dir.join(method).join("run.csv")).expect("run.csv");
+        assert_eq!(csv.lines().count(), 2, "{method}: header and one row");
+    }
+    let table = std::fs::read_to_string(dir.join("compare.csv")).expect("compare.csv");
+    let rows: Vec<&str> = table.lines().skip(1).collect();
+    assert_eq!(rows.len(), 2);
+    for row in rows {
+        assert_eq!(row.split(',').nth(4), Some("1"), "iterations column: {row}");
+    }
+    assert!(dir.join("compare.png").is_file());
+
+    let bad = epsm(&["optimize", problem, "--out", out, "--time-budget=-1"]);
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("--time-budget"));
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -177,7 +177,11 @@ pub fn backprop(input: &PassInput<'_>, records: &[PathRecord]) -> (Vec<f64>, Pas
             let g_rgb = input.loss.g_rgb.get(px).copied().unwrap_or(Vec3::ZERO);
             if g_rgb != Vec3::ZERO {
                 let scale = 1.0 / input.spp as f32;
-                for (k, dc) in input.colour.gradient(r, input.scene) {
+                for (k, dc) in
+                    input
+                        .colour
+                        .gradient(r, input.scene, &motion, &mut out.stats.dropped)
+                {
                     out.entries.push((k, f64::from(g_rgb.dot(dc) * scale)));
                 }
             }

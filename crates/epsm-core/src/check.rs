@@ -5,7 +5,8 @@
 //! satisfy it to ~1e-7), take the forward `dp/dθ` there, and compare with the
 //! Richardson-extrapolated central difference of re-solved pixels for every
 //! parameter the path touches (step [`fd_step`], shrunk so the pixel moves
-//! at most `max_pixel_step`). The error of a path is
+//! at most `max_pixel_step`, then moved to where successive estimates agree
+//! best: [`stable_difference`]). The error of a path is
 //! `‖FD − AN‖_F / max(‖AN‖_F, ‖FD‖_F, floor)` over its 2×k Jacobian; the
 //! adjoint gradient for a fixed `g` is compared with `g·dp/dθ` too. Paths
 //! whose `‖A‖₁‖A⁻¹‖₁` exceeds `well_conditioned` are counted apart: their
@@ -18,7 +19,7 @@ use rayon::prelude::*;
 
 use crate::drops::{DropCounts, Dropped};
 use crate::motion::Motion;
-use crate::newton::{NewtonSettings, central_difference, fd_step, project};
+use crate::newton::{NewtonSettings, fd_step, project, stable_difference};
 use crate::params::ParamTable;
 use crate::paths::{DiffPath, PathKind};
 use crate::solve::{SolveSettings, condition, solve_adjoint, solve_forward};
@@ -81,7 +82,7 @@ pub fn check_path(
     for (&param, col) in jac.params.iter().zip(&jac.columns) {
         let h0 = fd_step(&table.params()[param].target, s.radius);
         let h = h0 * (s.max_pixel_step / (h0 * col.length())).min(1.0);
-        let fd = central_difference(&path, table, param, h, &s.solve, &s.newton)?;
+        let fd = stable_difference(&path, table, param, h, &s.solve, &s.newton)?;
         diff += (fd - *col).length_squared();
         an += col.length_squared();
         fd_norm += fd.length_squared();

@@ -11,7 +11,7 @@ use glam::DVec2;
 
 #[test]
 fn adjoint_equals_forward_for_random_loss_gradients_on_every_path_type() {
-    let mut rng = Rng(99);
+    let mut rng = Rng::new(99);
     let settings = SolveSettings::for_radius(1.0);
     let mut compared = [0usize; PathKind::ALL.len()];
     let mut ill = 0;

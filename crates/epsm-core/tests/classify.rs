@@ -9,7 +9,7 @@ use epsm_core::{DropReason, PathKind, SolveSettings, classify};
 use glam::Vec3;
 
 fn kinds(spec: &Spec, seed: u64) -> Vec<(PathKind, usize, usize)> {
-    let mut rng = Rng(seed);
+    let mut rng = Rng::new(seed);
     let mut s = loop {
         if let Some(s) = build(spec, &mut rng) {
             break s;
@@ -93,7 +93,7 @@ fn each_record_pattern_yields_its_paths_with_the_right_unknowns() {
 
 #[test]
 fn background_endings_are_counted_and_untouched_paths_are_not_returned() {
-    let mut rng = Rng(7);
+    let mut rng = Rng::new(7);
     let mut s = loop {
         if let Some(s) = build(
             &Spec::new(PathKind::ChainToSurface, vec![Vertex::Mirror], End::Surface),
@@ -133,7 +133,7 @@ fn background_endings_are_counted_and_untouched_paths_are_not_returned() {
 
 #[test]
 fn a_path_carries_only_the_parameters_of_what_it_touches() {
-    let mut rng = Rng(11);
+    let mut rng = Rng::new(11);
     let mut s = loop {
         if let Some(s) = build(
             &Spec::new(PathKind::ChainToSurface, vec![Vertex::Mirror], End::Surface),

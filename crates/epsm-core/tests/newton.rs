@@ -44,7 +44,7 @@ fn random_spec(kind: PathKind, rng: &mut Rng) -> Spec {
 /// Builds `CONFIGS` configurations with paths of `kind` (the primary paths
 /// come from caustic records) and checks them.
 fn agreement(kind: PathKind, seed: u64) -> CheckReport {
-    let mut rng = Rng(seed);
+    let mut rng = Rng::new(seed);
     let settings = CheckSettings::for_radius(1.0);
     let mut report = CheckReport::default();
     let mut configs = 0;

@@ -17,7 +17,7 @@ fn run(
     scale: f64,
     make: impl Fn(&mut Rng) -> Spec,
 ) -> KindReport {
-    let mut rng = Rng(seed);
+    let mut rng = Rng::new(seed);
     let settings = CheckSettings::for_radius(scale);
     let mut report = epsm_core::check::CheckReport::default();
     let mut done = 0;

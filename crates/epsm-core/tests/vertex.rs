@@ -10,7 +10,7 @@ use epsm_render::hit::surface_point_f64;
 
 #[test]
 fn anchors_match_render_surface_points_and_their_u_derivatives() {
-    let mut rng = Rng(3);
+    let mut rng = Rng::new(3);
     let mut checked = 0;
     while checked < 300 {
         let spec = Spec::new(

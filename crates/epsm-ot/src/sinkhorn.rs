@@ -14,7 +14,8 @@
 //! | `sinkhorn.debias`          | return the Sinkhorn divergence `S_ε`      | false   | bool       |
 //! | `sinkhorn.truncation`      | drop pairs with `c − f − g > t·ε`         | 30      | ≥ 10       |
 //! | `sinkhorn.marginal_tolerance` | L1 marginal error to reach at final ε | 1e-3    | > 0        |
-//! | `sinkhorn.overrelaxation`  | ω of the updates at the final ε           | 1.9     | [1, 2)     |
+//! | `sinkhorn.overrelaxation`  | mixing β of the final-ε updates           | 1       | [1, 2)     |
+//! | `sinkhorn.anderson_memory` | Anderson memory of the final-ε updates    | 8       | ≥ 0        |
 //! | `sinkhorn.max_scale_iterations` | most updates per fine scale          | 30      | ≥ 1        |
 //! | `sinkhorn.scale_tolerance` | marginal error ending a fine scale        | 3e-3    | > 0        |
 //! | `sinkhorn.annealing_overrelaxation` | ω of the fine-phase updates      | 1.5     | [1, 2)     |
@@ -36,6 +37,7 @@
 //! debias = false
 //! ```
 
+mod anderson;
 mod dual;
 mod pass;
 
@@ -62,8 +64,11 @@ pub struct SinkhornSettings {
     pub marginal_tolerance: f64,
     /// Cap on those extra iterations.
     pub max_polish_iterations: usize,
-    /// Over-relaxation ω of the extra iterations, in `[1, 2)` (1 is plain Sinkhorn).
+    /// Mixing β of the accelerated extra iterations, in `[1, 2)` (with no
+    /// Anderson memory, the over-relaxation of plain Sinkhorn; 1 is plain Sinkhorn).
     pub overrelaxation: f64,
+    /// Anderson memory of the extra iterations (0: none).
+    pub anderson_memory: usize,
     /// Most updates per scale of the fine phase.
     pub max_scale_iterations: usize,
     /// A scale of the fine phase ends once its marginal error is below this.
@@ -90,7 +95,8 @@ impl Default for SinkhornSettings {
             truncation: 30.0,
             marginal_tolerance: 1e-3,
             max_polish_iterations: 5000,
-            overrelaxation: 1.9,
+            overrelaxation: 1.0,
+            anderson_memory: 8,
             max_scale_iterations: 30,
             scale_tolerance: 3e-3,
             annealing_overrelaxation: 1.5,

@@ -1,5 +1,6 @@
 //! `epsm compare`: run several methods on one problem with the same
-//! iteration count and seed, and draw their error-versus-time curves in one
+//! iteration count and seed (and, with `--time-budget`, the same cap on
+//! wall-clock seconds), and draw their error-versus-time curves in one
 //! plot (`compare.png`) with `compare.csv` beside it; each method's own run
 //! folder (`<out>/<method>/`) holds its full report.
 
@@ -29,6 +30,11 @@ pub struct CompareArgs {
     /// Seed (default: the problem's).
     #[arg(long)]
     pub seed: Option<u32>,
+    /// Give every method the same wall-clock budget: each stops once its
+    /// run reaches this many seconds (or its iterations end; raise
+    /// `--iterations` so that fast methods use the whole budget).
+    #[arg(long, value_name = "SECONDS")]
+    pub time_budget: Option<f64>,
     /// Also print the results as Markdown table rows (for docs/results.md).
     #[arg(long)]
     pub markdown: bool,
@@ -53,7 +59,7 @@ pub fn run(args: &CompareArgs) -> anyhow::Result<()> {
         let mut p = base.clone();
         apply_overrides(&mut p, args.iterations, Some(method), args.seed)?;
         eprintln!("{name}: running {method}");
-        let s = optimize(p, &out.join(method), false)?;
+        let s = optimize(p, &out.join(method), false, args.time_budget)?;
         runs.push((method.clone(), s));
     }
     let mut csv = String::from("problem,method,param_error,image_rmse,iterations,wall_s\n");

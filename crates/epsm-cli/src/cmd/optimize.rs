@@ -37,6 +37,10 @@ pub struct OptimizeArgs {
     /// Continue the run whose output folder is DIR from its checkpoint.
     #[arg(long, value_name = "DIR")]
     pub resume: Option<PathBuf>,
+    /// Stop once the optimization has run this many wall-clock seconds
+    /// (checked after each iteration; the iteration count still caps it).
+    #[arg(long, value_name = "SECONDS")]
+    pub time_budget: Option<f64>,
 }
 
 /// How a run ended.
@@ -98,7 +102,7 @@ pub fn run(args: &OptimizeArgs) -> anyhow::Result<()> {
         .clone()
         .or_else(|| args.out.clone())
         .unwrap_or_else(|| problem.out_dir.clone());
-    let s = optimize(problem, &out, args.resume.is_some())?;
+    let s = optimize(problem, &out, args.resume.is_some(), args.time_budget)?;
     println!(
         "{}: {} iterations in {:.1} s, image RMSE {:.4}, parameter error {} -> {}",
         args.problem.display(),
@@ -119,8 +123,21 @@ fn save(out: &Path, name: &str, img: &Image) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Runs (or resumes) `problem` writing into `out`.
-pub fn optimize(problem: Problem, out: &Path, resume: bool) -> anyhow::Result<Summary> {
+/// Runs (or resumes) `problem` writing into `out`, stopping after the
+/// problem's iterations or, when `budget_s` is given, once the run's
+/// wall-clock seconds reach it, whichever comes first.
+pub fn optimize(
+    problem: Problem,
+    out: &Path,
+    resume: bool,
+    budget_s: Option<f64>,
+) -> anyhow::Result<Summary> {
+    if let Some(b) = budget_s {
+        anyhow::ensure!(
+            b.is_finite() && b > 0.0,
+            "--time-budget must be a positive number of seconds, got {b}"
+        );
+    }
     let every = problem.checkpoint_every;
     let preview_spp = problem.passes.spp_primal.max(16);
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
@@ -137,7 +154,9 @@ pub fn optimize(problem: Problem, out: &Path, resume: bool) -> anyhow::Result<Su
     let total = u64::from(opt.problem().optimizer.iterations);
     let bar = progress::bar(total, "iterations");
     bar.set_position(u64::from(opt.iteration()));
-    while !opt.is_done() {
+    let within_budget =
+        |o: &Optimization| budget_s.is_none_or(|b| o.rows().last().is_none_or(|r| r.wall_s < b));
+    while !opt.is_done() && within_budget(&opt) {
         let row = opt.step()?;
         bar.set_message(format!("loss {:.3e}", row.loss));
         bar.inc(1);

@@ -40,7 +40,7 @@ pub use checkpoint::Checkpoint;
 pub use error::{OptResult, OptimizeError};
 
 use crate::backprop::{PassInput, PassStats, backprop, record_level};
-use crate::colour::ColourModel;
+use crate::colour::{ColourModel, PrimaryMotion};
 use crate::loss::{LossEval, evaluate, resample, rmse};
 use crate::optim::{Adam, AdamSettings};
 use crate::params::ParamTable;
@@ -243,7 +243,11 @@ impl Optimization {
     pub fn gradient(&self) -> OptResult<(GradientEval, Vec<PathRecord>)> {
         let use_ = self.schedule.paths_at(self.iteration);
         let l2 = !self.schedule.loss_at(self.iteration).is_ot();
-        let colour = ColourModel::new(&self.grad.table, &self.grad.scene, l2);
+        let colour = ColourModel::new(
+            &self.grad.table,
+            &self.grad.scene,
+            l2.then_some(PrimaryMotion::OnCameraRay),
+        );
         let level = record_level(&self.grad.table, &self.grad.scene, &colour, use_);
         let spp = self.problem.passes.spp_grad;
         let t0 = Instant::now();

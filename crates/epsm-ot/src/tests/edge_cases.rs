@@ -130,10 +130,26 @@ fn identical_clouds_give_zero_loss_and_gradient() {
             m.name()
         );
     }
-    let r = Matcher::sinkhorn()
-        .solve(&a, &a)
-        .unwrap_or_else(|e| panic!("{e}"));
-    assert!(all_finite(&r) && r.gradient.iter().flatten().all(|g| g.abs() < 1e-5));
+    // OT_ε (not debiased) has a zero gradient at its fixed point; the polish stops
+    // at the marginal tolerance, so the residual gradient shrinks with it.
+    for (tolerance, bound) in [(1e-3, 1e-4), (1e-6, 1e-5)] {
+        let settings = SinkhornSettings {
+            marginal_tolerance: tolerance,
+            ..SinkhornSettings::default()
+        };
+        let r = Matcher::Sinkhorn(settings)
+            .solve(&a, &a)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let gmax = r
+            .gradient
+            .iter()
+            .flatten()
+            .fold(0.0f32, |m, g| m.max(g.abs()));
+        assert!(
+            all_finite(&r) && gmax < bound,
+            "tolerance {tolerance}: gradient {gmax}"
+        );
+    }
 }
 
 #[test]

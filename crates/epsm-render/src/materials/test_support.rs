@@ -1,40 +1,10 @@
-//! Test helpers shared by the material and light tests: a deterministic
-//! random stream, spherical binning and Pearson's χ² goodness-of-fit test with
+//! Test helpers shared by the material and light tests: the shared
+//! deterministic random stream (`epsm_testkit::Rng`), spherical binning and Pearson's χ² goodness-of-fit test with
 //! pbrt's pooling of low-expectation bins (pbrt-v3 `bsdfs_test`).
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 
-/// SplitMix64: a tiny deterministic stream of uniform numbers in `[0, 1)`.
-pub struct Rng(u64);
-
-impl Rng {
-    /// A stream from a seed.
-    pub fn new(seed: u64) -> Self {
-        Self(seed)
-    }
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    /// Uniform in `[0, 1)`.
-    pub fn f32(&mut self) -> f32 {
-        (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
-    }
-    /// Two uniforms in `[0, 1)`.
-    pub fn vec2(&mut self) -> Vec2 {
-        Vec2::new(self.f32(), self.f32())
-    }
-    /// A uniform direction on the sphere.
-    pub fn sphere(&mut self) -> Vec3 {
-        let z = 1.0 - 2.0 * self.f32();
-        let r = (1.0 - z * z).max(0.0).sqrt();
-        let phi = 2.0 * std::f32::consts::PI * self.f32();
-        Vec3::new(r * phi.cos(), r * phi.sin(), z)
-    }
-}
+pub use epsm_testkit::Rng;
 
 /// The unit direction with polar angle `theta` (from `+z`) and azimuth `phi`.
 pub fn spherical(theta: f64, phi: f64) -> Vec3 {

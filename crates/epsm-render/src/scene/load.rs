@@ -2,7 +2,7 @@
 //! [`import`](super::import), see [`load_file`]). The TOML format is
 //! [`desc`](super::desc), documented in `docs/scene-format.md`: parse the TOML, deserialize it with unknown keys
 //! rejected, check every value against its documented range and build the
-//! [`SceneParts`]. Every error is a [`SceneError`](crate::error::SceneError) naming the file, the dotted
+//! [`SceneParts`]. Every error is a [`SceneError`] naming the file, the dotted
 //! field (`objects[2].material`) and what was expected, with the line when the
 //! file has one. Relative paths (meshes, textures, environment maps) resolve
 //! against the scene file's directory; each mesh or image file is read once
@@ -106,7 +106,7 @@ pub fn parts_from_str(text: &str, file: &Path) -> Result<SceneParts> {
 
 /// Parses `text` as TOML into `T` (any serde type, such as a problem file
 /// that embeds a [`SceneDesc`]), returning it with a [`Locator`] for later
-/// semantic errors. Syntax and type errors are located [`SceneError`](crate::error::SceneError)s.
+/// semantic errors. Syntax and type errors are located [`SceneError`]s.
 pub fn parse_toml<T: DeserializeOwned>(text: &str, file: &Path) -> Result<(T, Locator)> {
     let root = toml::de::DeTable::parse(text)
         .map_err(|e| Error::from(locate::syntax_error(file, text, &e)))?;

@@ -7,40 +7,9 @@
 use std::sync::Arc;
 
 use epsm_render::scene::{Mesh, Object};
-use glam::{DAffine3, DQuat, DVec3, Vec2, Vec3};
+use glam::{DAffine3, DQuat, Vec2, Vec3};
 
-/// SplitMix64: a small deterministic generator for test scenes and rays.
-pub struct Rng(pub u64);
-
-impl Rng {
-    pub fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    pub fn f64(&mut self) -> f64 {
-        (self.next() >> 11) as f64 / (1u64 << 53) as f64
-    }
-    pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.f64()
-    }
-    pub fn below(&mut self, n: usize) -> usize {
-        (self.next() % n as u64) as usize
-    }
-    pub fn dvec3(&mut self, lo: f64, hi: f64) -> DVec3 {
-        DVec3::new(self.range(lo, hi), self.range(lo, hi), self.range(lo, hi))
-    }
-    pub fn unit(&mut self) -> DVec3 {
-        loop {
-            let v = self.dvec3(-1.0, 1.0);
-            if (1e-3..=1.0).contains(&v.length_squared()) {
-                return v.normalize();
-            }
-        }
-    }
-}
+pub use epsm_testkit::Rng;
 
 /// Random triangles in `[-1, 1]³`, with thin and degenerate ones mixed in.
 pub fn soup(rng: &mut Rng, count: usize) -> Mesh {

@@ -1,8 +1,8 @@
-//! Mitsuba 3 XML → a tree of [`Element`]s through `roxmltree`: `<default>`
+//! Mitsuba 3 XML → a tree of `Element`s through `roxmltree`: `<default>`
 //! parameters substituted for `$name` in every attribute, each element given
 //! a dotted field path (`shape[floor].bsdf.reflectance`) registered with its
 //! byte range so later errors carry the line. Readers mark what they read
-//! (typed property readers are in [`props`](super::props)) so [`finish`] can
+//! (typed property readers are in [`props`](super::props)) so `finish` can
 //! reject what nobody read.
 //!
 //! | path segment | element |

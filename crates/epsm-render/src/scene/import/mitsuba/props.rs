@@ -1,5 +1,5 @@
 //! Typed readers of Mitsuba properties, each checking the tag and the
-//! value and marking the property as read (see [`finish`](super::parse::finish)).
+//! value and marking the property as read (see `parse::finish`).
 //!
 //! | reader | accepted elements | value |
 //! |---|---|---|

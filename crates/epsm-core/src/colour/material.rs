@@ -1,0 +1,99 @@
+//! Colour derivatives for material values at fixed sampled directions:
+//! each parameter's material is evaluated at `θ ± h` ([`Probe`]) and the
+//! path's terms after a vertex of that material scale by `∂ ln f/∂θ`.
+//!
+//! | parameter | factor | derivative |
+//! |---|---|---|
+//! | `albedo.r/g/b` (diffuse) | `f·|cos|` | central difference (exact: linear) |
+//! | `alpha` (rough conductor) | `f·|cos|` | central difference, `h = 1e-3·max(α, 1e-3)` |
+//! | `ior` (dielectric) | the lobe's weight over its fixed choice probability: `F` (reflection), `(1 − F)/η²` (refraction) | central difference, `h = 1e-4·ior` |
+//!
+//! The refracted direction's change with `ior` moves the chain: that is a
+//! position effect, differentiated through `dp/dθ`.
+
+use epsm_render::materials::fresnel::fresnel_dielectric;
+use epsm_render::materials::{Bsdf, Lobe, Material, Texture};
+use glam::{Vec2, Vec3};
+
+use crate::params::Target;
+
+/// One material parameter with the material moved to `θ ± h`.
+#[derive(Clone, Debug)]
+pub(super) struct Probe {
+    pub(super) param: usize,
+    /// `(θ + h) − max(θ − h, 0)`: the width of the central difference.
+    width: f32,
+    plus: Material,
+    minus: Material,
+}
+
+/// `material` with the value of `target` set to `value` (unchanged when the
+/// target does not apply).
+fn with_value(material: &Material, target: Target, value: f32) -> Material {
+    let mut m = material.clone();
+    match (&mut m.bsdf, target) {
+        (Bsdf::Diffuse(d), Target::Albedo { channel, .. }) => {
+            if let Texture::Constant(c) = &mut d.albedo {
+                c[channel] = value;
+            }
+        }
+        (Bsdf::RoughConductor(r), Target::Alpha { .. }) => r.alpha = value,
+        (Bsdf::Dielectric(d), Target::Ior { .. }) => d.ior = value,
+        _ => {}
+    }
+    m
+}
+
+impl Probe {
+    /// The probe of parameter `param` (value `v`, driving `target`) on `material`.
+    pub(super) fn new(param: usize, material: &Material, target: Target, v: f32) -> Self {
+        let h = match target {
+            Target::Alpha { .. } => 1e-3 * v.max(1e-3),
+            Target::Ior { .. } => 1e-4 * v.abs().max(1.0),
+            _ => 1e-3,
+        };
+        let lo = (v - h).max(0.0);
+        Self {
+            param,
+            width: v + h - lo,
+            plus: with_value(material, target, v + h),
+            minus: with_value(material, target, lo),
+        }
+    }
+
+    /// `∂ ln f/∂θ` per channel of a non-delta scattering from `wi` to `wo`
+    /// (local directions; 0 where `f = 0`).
+    pub(super) fn ratio(&self, wi: Vec3, wo: Vec3) -> Vec3 {
+        let uv = Vec2::ZERO;
+        log_rate(
+            self.plus.eval(wi, wo, uv),
+            self.minus.eval(wi, wo, uv),
+            self.width,
+        )
+    }
+
+    /// `∂ ln w/∂θ` of a delta lobe's weight `w` for local `wi`.
+    pub(super) fn delta_ratio(&self, wi: Vec3, lobe: Lobe) -> Vec3 {
+        let w = |m: &Material| match &m.bsdf {
+            Bsdf::Dielectric(d) => {
+                let eta = if wi.z >= 0.0 { d.ior } else { 1.0 / d.ior };
+                let f = fresnel_dielectric(wi.z.abs(), eta);
+                Vec3::splat(if lobe.is_transmission() {
+                    (1.0 - f) / (eta * eta)
+                } else {
+                    f
+                })
+            }
+            _ => Vec3::ZERO,
+        };
+        log_rate(w(&self.plus), w(&self.minus), self.width)
+    }
+}
+
+/// `∂ ln f` per channel from `f(θ + h) = p`, `f(θ − h) = m` over `width`
+/// (0 where `f = 0`).
+fn log_rate(p: Vec3, m: Vec3, width: f32) -> Vec3 {
+    let tiny = Vec3::splat(1e-20);
+    let f = 0.5 * (p + m);
+    Vec3::select(f.cmpgt(tiny), (p - m) / width / f.max(tiny), Vec3::ZERO)
+}

@@ -1,0 +1,11 @@
+//! Test support shared by the tests of the epsm crates (a dev-dependency
+//! only; never part of a library's public surface):
+//! - [`Rng`]: a seeded, portable random stream (PCG64-MCG from `rand_pcg`)
+//!   with the few geometric draws the tests use;
+//! - [`corpus`]: the runner that checks every file of a malformed-input
+//!   corpus is rejected with an error naming the file and the field.
+
+pub mod corpus;
+mod rng;
+
+pub use rng::Rng;
