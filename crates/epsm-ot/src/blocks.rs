@@ -213,10 +213,40 @@ fn pair_bound(ci: &Cluster, fi: &PotentialFit, cj: &Cluster, gj: &PotentialFit) 
         - gj.max_residual
 }
 
-/// For each source cluster, the target clusters whose reduced-cost bound is at most `threshold`.
+/// The target clusters whose reduced-cost bound against source cluster `ci` is at most `threshold`.
 ///
-/// A source cluster whose every bound exceeds the threshold keeps its best target cluster,
-/// so no row of a plan is ever empty.
+/// If every bound exceeds the threshold the best target cluster is kept, so
+/// no row of a plan is ever empty.
+pub(crate) fn kept_targets(
+    ci: &Cluster,
+    fi: &PotentialFit,
+    dst: &Clustered,
+    g: &[PotentialFit],
+    threshold: f64,
+) -> Vec<u32> {
+    let bounds = dst
+        .clusters
+        .iter()
+        .zip(g)
+        .map(|(cj, gj)| pair_bound(ci, fi, cj, gj));
+    let kept: Vec<u32> = bounds
+        .clone()
+        .enumerate()
+        .filter(|(_, b)| *b <= threshold)
+        .map(|(j, _)| j as u32)
+        .collect();
+    if kept.is_empty() {
+        let best = bounds
+            .enumerate()
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map_or(0, |(j, _)| j as u32);
+        vec![best]
+    } else {
+        kept
+    }
+}
+
+/// [`kept_targets`] for every source cluster.
 fn kept_pairs(
     src: &Clustered,
     f: &[PotentialFit],
@@ -227,28 +257,7 @@ fn kept_pairs(
     src.clusters
         .par_iter()
         .zip(f)
-        .map(|(ci, fi)| {
-            let bounds = dst
-                .clusters
-                .iter()
-                .zip(g)
-                .map(|(cj, gj)| pair_bound(ci, fi, cj, gj));
-            let kept: Vec<u32> = bounds
-                .clone()
-                .enumerate()
-                .filter(|(_, b)| *b <= threshold)
-                .map(|(j, _)| j as u32)
-                .collect();
-            if kept.is_empty() {
-                let best = bounds
-                    .enumerate()
-                    .min_by(|a, b| a.1.total_cmp(&b.1))
-                    .map_or(0, |(j, _)| j as u32);
-                vec![best]
-            } else {
-                kept
-            }
-        })
+        .map(|(ci, fi)| kept_targets(ci, fi, dst, g, threshold))
         .collect()
 }
 

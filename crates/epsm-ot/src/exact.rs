@@ -13,7 +13,9 @@
 //! 3. **Sparse solve**: an ε-scaling auction from prices `−g` finds near-optimal
 //!    potentials (`auction`), then shortest augmenting paths make the
 //!    matching exactly complementary-slack with them (`sparse`).
-//! 4. **Optimality check**: a streaming pass over all pairs (block pairs are
+//! 4. **Optimality check**: a streaming pass over all pairs of the rows whose
+//!    potential rose since the last check (the others cannot have gained a
+//!    violation: see `sparse`; block pairs are
 //!    skipped only when a rigorous bound proves `c_ij − u_i − v_j ≥ 0` for
 //!    all of them, see `blocks`) collects every pair with reduced cost below
 //!    `−tolerance`; each row's `candidates` worst violators are added to the
@@ -36,7 +38,7 @@ mod sparse;
 
 use rayon::prelude::*;
 
-use crate::blocks::{Clustered, Support, fit_potentials};
+use crate::blocks::{Clustered, fit_potentials, kept_targets};
 use crate::cost::{diameter_sq, sq_dist_f64};
 use crate::error::OtError;
 use crate::plan::{OtResult, SolveStats};
@@ -229,7 +231,9 @@ pub(crate) fn solve_sorted(
             }
         }
         // Optimality check over all pairs; add each row's worst violators and solve again.
-        let (violations, checked) = violations(x, y, &lsap.u, &lsap.v, settings.tolerance, k);
+        let rows = lsap.take_raised();
+        let (violations, checked) =
+            violations(x, y, &lsap.u, &lsap.v, settings.tolerance, k, &rows);
         stats.pair_evaluations += checked;
         if violations.is_empty() {
             stats.candidate_pairs = lsap.edge_count();
@@ -286,7 +290,8 @@ fn best_partners(
 /// A candidate edge `(row, column, cost)`.
 type Edge = (u32, u32, f64);
 
-/// For each row, its `per_row` most violated pairs (`c_ij − u_i − v_j < −tolerance`), and the number of pairs evaluated.
+/// For each row flagged in `rows`, its `per_row` most violated pairs
+/// (`c_ij − u_i − v_j < −tolerance`), and the number of pairs evaluated.
 fn violations(
     x: &Clustered,
     y: &Clustered,
@@ -294,16 +299,25 @@ fn violations(
     v: &[f64],
     tolerance: f64,
     per_row: usize,
+    rows: &[bool],
 ) -> (Vec<Edge>, u64) {
-    let sup = Support::truncated(x, &fit_potentials(x, u), y, &fit_potentials(y, v), 0.0);
+    let (fit_u, fit_v) = (fit_potentials(x, u), fit_potentials(y, v));
     let parts: Vec<(Vec<Edge>, u64)> = x
         .clusters
         .par_iter()
-        .zip(&sup.rows)
-        .map(|(ci, list)| {
+        .zip(&fit_u)
+        .map(|(ci, fi)| {
             let mut found = Vec::new();
             let mut checked = 0u64;
-            for i in ci.range.clone() {
+            if !rows[ci.range.clone()].iter().any(|&r| r) {
+                return (found, checked);
+            }
+            let list = kept_targets(ci, fi, y, &fit_v, 0.0);
+            let width: u64 = list
+                .iter()
+                .map(|&jb| y.clusters[jb as usize].range.len() as u64)
+                .sum();
+            for i in ci.range.clone().filter(|&i| rows[i]) {
                 let p = x.cloud.point(i);
                 let mut row: Vec<(f64, u32, f64)> = Vec::new();
                 for j in list
@@ -324,10 +338,7 @@ fn violations(
                     row.truncate(per_row);
                 }
                 found.extend(row.into_iter().map(|(_, j, c)| (i as u32, j, c)));
-                checked += list
-                    .iter()
-                    .map(|&jb| y.clusters[jb as usize].range.len() as u64)
-                    .sum::<u64>();
+                checked += width;
             }
             (found, checked)
         })

@@ -49,6 +49,8 @@ pub(crate) struct SparseAssignment {
     dist: Vec<f64>,
     pred: Vec<u32>,
     scanned: Vec<bool>,
+    /// Rows whose potential rose since the last [`Self::take_raised`].
+    raised: Vec<bool>,
 }
 
 impl SparseAssignment {
@@ -64,6 +66,7 @@ impl SparseAssignment {
             dist: vec![f64::INFINITY; n],
             pred: vec![NONE; n],
             scanned: vec![false; n],
+            raised: vec![true; n],
             edges,
         };
         for i in 0..n {
@@ -104,6 +107,15 @@ impl SparseAssignment {
         }
     }
 
+    /// Which rows had their potential raised since the last call (all rows at first), and clears the flags.
+    ///
+    /// Only these rows can have gained a violated pair: augmentations only
+    /// raise row potentials and lower column potentials, and added edges only
+    /// lower row potentials, so `c_ij − u_i − v_j` can only have dropped where `u_i` rose.
+    pub fn take_raised(&mut self) -> Vec<bool> {
+        std::mem::replace(&mut self.raised, vec![false; self.u.len()])
+    }
+
     /// Rows without a column.
     pub fn free_rows(&self) -> Vec<usize> {
         (0..self.col_of.len())
@@ -140,11 +152,14 @@ impl SparseAssignment {
         if let Some((sink, dmin)) = found {
             // Shift potentials: settled columns and their rows move by dmin − d_j.
             self.u[i0] += dmin;
+            self.raised[i0] = true;
             for &j in &scanned {
                 let j = j as usize;
                 if j != sink {
                     let shift = dmin - self.dist[j];
-                    self.u[self.row_of[j] as usize] += shift;
+                    let i = self.row_of[j] as usize;
+                    self.u[i] += shift;
+                    self.raised[i] = true;
                     self.v[j] -= shift;
                 }
             }
