@@ -16,7 +16,11 @@
 //! | translation, rotation, scale of objects and emitters; point lights; camera position, yaw, pitch | vertices move with θ: BSDF values, cosines, `1/r²`, area | [`geometry`] |
 //!
 //! Geometric terms are built only when the model is made with a
-//! [`PrimaryMotion`] (the method decides; see [`crate::schedule`]). Terms
+//! [`PrimaryMotion`]. The optimisation loop asks for them in L2 iterations
+//! ([`PrimaryMotion::OnCameraRay`]): with OT, colour gradients point at
+//! matched colours, and on the layout problem adding the geometric shading
+//! terms ([`PrimaryMotion::Attached`]) slowed the translations and did not
+//! stop the rotation's drift. Terms
 //! that cannot be differentiated (a moving delta vertex: its motion is the
 //! manifold's, carried by `dp/dθ`) are counted, never silently dropped.
 
