@@ -26,21 +26,26 @@
 //! | `s²` (area) | a vertex or light point on an object of scale `s` | `2 ∂s/s` |
 //!
 //! Camera importance and emitted radiance (Lambertian emitters) are
-//! constant; for the escaped radiance the last vertex's own factor (its
-//! escape direction is not recorded) is held fixed. A delta (specular)
-//! vertex whose position or neighbours move would need the chain's
-//! manifold motion: terms past it are left out for that parameter and
-//! counted ([`DropReason::NotDifferentiable`]).
+//! constant; for the escaped radiance the last non-delta vertex's own
+//! factor (its escape direction is not recorded) and the background are
+//! held fixed. Delta (specular) vertices: with the camera-ray convention the
+//! vertex after a mirror or glass interface stays on the scattered ray and
+//! the lobe's Fresnel weight changes with `cos θi` ([`chain`]); with the
+//! attached convention their motion is the manifold's (carried by `dp/dθ`),
+//! so terms past a delta vertex whose neighbourhood moves are left out for
+//! that parameter and counted ([`DropReason::NotDifferentiable`]).
 
 use epsm_render::Scene;
 use epsm_render::lights::LightPoint;
-use epsm_render::materials::{Bsdf, Material, VertexKind};
-use epsm_render::record::{PathRecord, TrianglePoint};
+use epsm_render::materials::{Bsdf, Lobe, Material};
+use epsm_render::record::{PathRecord, TrianglePoint, VertexRecord};
 use glam::{DVec2, DVec3, Vec2, Vec3};
 
 use crate::drops::{DropCounts, DropReason};
 use crate::motion::Motion;
 use crate::vertex::Anchor;
+
+use super::chain;
 
 /// How the vertex a pixel sees moves with θ.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -63,6 +68,9 @@ struct Placed {
     grads: Vec<(usize, DVec3, DVec3)>,
     /// `(param, ∂ ln(area)/∂θ)` of the object's area measure.
     area: Vec<(usize, f64)>,
+    /// `∂x/∂u`, `∂n/∂u` of a surface point's tangent parameterisation.
+    dx_du: [DVec3; 2],
+    dn_du: [DVec3; 2],
 }
 
 impl Placed {
@@ -78,6 +86,15 @@ impl Placed {
             n: self.n,
             dn,
         }
+    }
+
+    /// The gradient entry of parameter `k` after the tangent step `du`.
+    fn stepped(&self, k: usize, m: &Moving, du: DVec2) -> (usize, DVec3, DVec3) {
+        (
+            k,
+            m.dx + self.dx_du[0] * du.x + self.dx_du[1] * du.y,
+            m.dn + self.dn_du[0] * du.x + self.dn_du[1] * du.y,
+        )
     }
 
     fn area_rate(&self, k: usize) -> f64 {
@@ -210,44 +227,28 @@ fn surface(
         n: vs.n,
         grads,
         area,
+        dx_du: vs.dx_du,
+        dn_du: vs.dn_du,
     })
 }
 
 /// Moves the pixel's vertex `x1` along its camera ray: at each parameter,
 /// the tangent step `du` that keeps its film position, `J_π ∂x/∂u du =
-/// −dp/dθ`. `None` when the ray grazes the surface.
-fn on_camera_ray(
-    x1: &mut Placed,
-    scene: &Scene,
-    motion: &Motion,
-    at: &TrianglePoint,
-) -> Option<()> {
-    let om = motion.objects.get(at.object as usize)?;
-    let object = scene.objects().get(at.object as usize)?;
-    let anchor = Anchor::new(
-        object,
-        at.object,
-        at.triangle,
-        f64::from(at.b1),
-        f64::from(at.b2),
-        om,
-    )?;
-    let vs = anchor.eval(om, [0.0; 2]);
+/// −dp/dθ`. Fails when the ray grazes the surface.
+fn on_camera_ray(x1: &mut Placed, motion: &Motion) -> Result<(), DropReason> {
     let pose = &motion.camera.pose;
-    let cols = vs.dx_du.map(|t| pose.pixel_derivative(vs.x, t, None));
+    let cols = x1.dx_du.map(|t| pose.pixel_derivative(x1.x, t, None));
     let [Some(c0), Some(c1)] = cols else {
-        return None;
+        return Err(DropReason::BehindCamera);
     };
     let det = c0.perp_dot(c1);
     if det.abs() < 1e-9 * c0.length_squared().max(c1.length_squared()) {
-        return None;
+        return Err(DropReason::Grazing);
     }
     let mut params: Vec<usize> = x1.grads.iter().map(|g| g.0).collect();
     params.extend(motion.camera.grads.iter().map(|g| g.param));
-    params.sort_unstable();
-    params.dedup();
     let mut grads = Vec::with_capacity(params.len());
-    for k in params {
+    for k in sorted(params) {
         let m = x1.d(k);
         let dpose = motion
             .camera
@@ -255,17 +256,55 @@ fn on_camera_ray(
             .iter()
             .find(|g| g.param == k)
             .map(|g| &g.pose);
-        let dp = pose.pixel_derivative(vs.x, m.dx, dpose)?;
+        let dp = pose
+            .pixel_derivative(x1.x, m.dx, dpose)
+            .ok_or(DropReason::BehindCamera)?;
         // Solve [c0 c1] du = −dp.
         let du = DVec2::new(-dp.perp_dot(c1), -c0.perp_dot(dp)) / det;
-        grads.push((
-            k,
-            m.dx + vs.dx_du[0] * du.x + vs.dx_du[1] * du.y,
-            m.dn + vs.dn_du[0] * du.x + vs.dn_du[1] * du.y,
-        ));
+        grads.push(x1.stepped(k, &m, du));
     }
     x1.grads = grads;
-    Some(())
+    Ok(())
+}
+
+/// Moves vertex `next` along the ray a delta vertex `at` (reached from
+/// `prev`) scatters toward (see [`chain`]). Fails under total internal
+/// reflection or when the ray grazes `next`'s surface.
+fn on_scattered_ray(
+    next: &mut Placed,
+    at: &Placed,
+    prev: &Placed,
+    eta: f64,
+    transmit: bool,
+) -> Result<(), DropReason> {
+    let params = [prev, at, &*next]
+        .iter()
+        .flat_map(|p| p.grads.iter().map(|g| g.0))
+        .collect();
+    let mut grads = Vec::new();
+    for k in sorted(params) {
+        let (a, b, c) = (prev.d(k), at.d(k), next.d(k));
+        let (wi, _) = toward(&b, &a);
+        let [r, dr] = chain::scattered(wi.w, wi.dw, b.n, b.dn, eta, transmit)
+            .ok_or(DropReason::TotalInternalReflection)?;
+        let du = chain::ray_step(c.x - b.x, r, dr, c.dx - b.dx, next.dx_du)
+            .ok_or(DropReason::Grazing)?;
+        grads.push(next.stepped(k, &c, du));
+    }
+    next.grads = grads;
+    next.area.clear();
+    Ok(())
+}
+
+fn sorted(mut v: Vec<usize>) -> Vec<usize> {
+    v.sort_unstable();
+    v.dedup();
+    v
+}
+
+/// The delta lobe that scattered at `v`, if any.
+fn delta_lobe(v: &VertexRecord) -> Option<Lobe> {
+    v.lobe.filter(|l| l.is_delta())
 }
 
 /// The geometric colour derivatives of one record.
@@ -302,7 +341,7 @@ impl Geometric<'_> {
 
     /// The nodes of `record` (camera, vertices) and of its connections'
     /// light points (`None` for the background).
-    fn place(&self, record: &PathRecord) -> Option<(Vec<Placed>, Vec<Option<Placed>>)> {
+    fn place(&self, record: &PathRecord) -> Result<(Vec<Placed>, Vec<Option<Placed>>), DropReason> {
         let cam = &self.motion.camera;
         let mut nodes = vec![Placed {
             x: crate::pixel::glam3(&cam.pose.origin),
@@ -313,13 +352,24 @@ impl Geometric<'_> {
                 .collect(),
             ..Placed::default()
         }];
+        let on_rays = self.primary == PrimaryMotion::OnCameraRay;
         for (i, v) in record.vertices.iter().enumerate() {
-            let mut p = surface(self.scene, self.motion, &v.at, self.scales)?;
+            let mut p = surface(self.scene, self.motion, &v.at, self.scales)
+                .ok_or(DropReason::DegenerateTriangle)?;
             if i == 0 {
                 p.area.clear();
-                if self.primary == PrimaryMotion::OnCameraRay {
-                    on_camera_ray(&mut p, self.scene, self.motion, &v.at)?;
+                if on_rays {
+                    on_camera_ray(&mut p, self.motion)?;
                 }
+            } else if let (true, Some(lobe)) = (on_rays, delta_lobe(&record.vertices[i - 1])) {
+                let eta = f64::from(record.vertices[i - 1].eta);
+                on_scattered_ray(
+                    &mut p,
+                    &nodes[i],
+                    &nodes[i - 1],
+                    eta,
+                    lobe.is_transmission(),
+                )?;
             }
             nodes.push(p);
         }
@@ -331,19 +381,26 @@ impl Geometric<'_> {
                     triangle,
                     b1,
                     b2,
-                } => Some(surface(
-                    self.scene,
-                    self.motion,
-                    &TrianglePoint {
-                        object,
-                        triangle,
-                        b1,
-                        b2,
-                    },
-                    self.scales,
-                )?),
+                } => Some(
+                    surface(
+                        self.scene,
+                        self.motion,
+                        &TrianglePoint {
+                            object,
+                            triangle,
+                            b1,
+                            b2,
+                        },
+                        self.scales,
+                    )
+                    .ok_or(DropReason::DegenerateTriangle)?,
+                ),
                 LightPoint::Point { index } => {
-                    let l = self.motion.lights.get(index as usize)?;
+                    let l = self
+                        .motion
+                        .lights
+                        .get(index as usize)
+                        .ok_or(DropReason::NotDifferentiable)?;
                     Some(Placed {
                         x: l.position,
                         grads: l
@@ -357,7 +414,7 @@ impl Geometric<'_> {
                 LightPoint::Background => None,
             });
         }
-        Some((nodes, lights))
+        Ok((nodes, lights))
     }
 
     /// Adds `(param, ∂c/∂θ)` entries of `record` to `out`; counts the terms
@@ -371,9 +428,12 @@ impl Geometric<'_> {
         if !self.moves(record) {
             return;
         }
-        let Some((nodes, lights)) = self.place(record) else {
-            skipped.add(DropReason::DegenerateTriangle);
-            return;
+        let (nodes, lights) = match self.place(record) {
+            Ok(placed) => placed,
+            Err(reason) => {
+                skipped.add(reason);
+                return;
+            }
         };
         let mut params: Vec<usize> = nodes
             .iter()
@@ -424,8 +484,12 @@ impl Geometric<'_> {
                 skipped.add(DropReason::DegenerateTriangle);
                 return;
             };
-            let delta = v[i].kind == VertexKind::Specular;
-            if delta && (m[j - 1..nodes.len().min(j + 2)].iter().any(|n| !n.still())) {
+            let delta = delta_lobe(&v[i]);
+            let on_rays = self.primary == PrimaryMotion::OnCameraRay;
+            if delta.is_some()
+                && !on_rays
+                && m[j - 1..nodes.len().min(j + 2)].iter().any(|n| !n.still())
+            {
                 valid = false;
             }
             if !valid {
@@ -460,14 +524,22 @@ impl Geometric<'_> {
                 };
                 sum += c.contribution * (prefix + rate);
             }
-            // The segment to the next vertex.
-            if let Some(next) = m.get(j + 1)
-                && !delta
-            {
-                let (wo, dr) = toward(&m[j], next);
-                let (cn, dcn) = cos(next, &wo);
-                prefix += bsdf_rate(mat, &m[j], &wi, &wo)
-                    + Vec3::splat((dcn / cn - 2.0 * dr + nodes[j + 1].area_rate(k)) as f32);
+            // The segment to the next vertex: the lobe's weight at a delta
+            // vertex (the next vertex lies on its ray), else the BSDF and
+            // the area-measure geometry.
+            match (m.get(j + 1), delta) {
+                (_, Some(lobe)) => {
+                    let (c, dc) = cos(&m[j], &wi);
+                    let rate = chain::weight_rate(mat, lobe, v[i].eta, c, dc);
+                    prefix += Vec3::splat(rate as f32);
+                }
+                (Some(next), None) => {
+                    let (wo, dr) = toward(&m[j], next);
+                    let (cn, dcn) = cos(next, &wo);
+                    prefix += bsdf_rate(mat, &m[j], &wi, &wo)
+                        + Vec3::splat((dcn / cn - 2.0 * dr + nodes[j + 1].area_rate(k)) as f32);
+                }
+                (None, _) => {}
             }
         }
         if valid {

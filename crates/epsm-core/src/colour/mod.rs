@@ -24,6 +24,7 @@
 //! that cannot be differentiated (a moving delta vertex: its motion is the
 //! manifold's, carried by `dp/dθ`) are counted, never silently dropped.
 
+mod chain;
 pub mod geometry;
 mod material;
 
