@@ -3,7 +3,7 @@
 //! vertices move with θ and visibility stays as recorded.
 //!
 //! Vertex motion comes from the motion model ([`crate::motion`] through
-//! [`Anchor`]): every surface vertex and area-light point keeps its local
+//! [`crate::vertex::Anchor`]): every surface vertex and area-light point keeps its local
 //! coordinates on its object (area measure, `x = M(θ)·p_obj`, the shading
 //! normal turning with `M`); the camera eye and point lights move with
 //! their parameters. The vertex the pixel sees moves in one of two ways
@@ -30,22 +30,22 @@
 //! factor (its escape direction is not recorded) and the background are
 //! held fixed. Delta (specular) vertices: with the camera-ray convention the
 //! vertex after a mirror or glass interface stays on the scattered ray and
-//! the lobe's Fresnel weight changes with `cos θi` ([`chain`]); with the
+//! the lobe's Fresnel weight changes with `cos θi` (`chain.rs`); with the
 //! attached convention their motion is the manifold's (carried by `dp/dθ`),
 //! so terms past a delta vertex whose neighbourhood moves are left out for
 //! that parameter and counted ([`DropReason::NotDifferentiable`]).
 
 use epsm_render::Scene;
-use epsm_render::lights::LightPoint;
-use epsm_render::materials::{Bsdf, Lobe, Material};
-use epsm_render::record::{PathRecord, TrianglePoint, VertexRecord};
-use glam::{DVec2, DVec3, Vec2, Vec3};
+use epsm_render::materials::{Bsdf, Material};
+use epsm_render::record::PathRecord;
+use glam::{DVec3, Vec2, Vec3};
 
 use crate::drops::{DropCounts, DropReason};
 use crate::motion::Motion;
-use crate::vertex::Anchor;
 
 use super::chain;
+use super::moving::{Dir, Moving, Placed, cos, toward};
+use super::place::delta_lobe;
 
 /// How the vertex a pixel sees moves with θ.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -56,91 +56,6 @@ pub enum PrimaryMotion {
     /// Along the pixel's fixed film position: the conventional renderer's
     /// camera ray.
     OnCameraRay,
-}
-
-/// A node's position and normal at θ and their derivatives.
-#[derive(Clone, Debug, Default)]
-struct Placed {
-    x: DVec3,
-    /// Unit normal (zero for the camera and point lights).
-    n: DVec3,
-    /// `(param, ∂x/∂θ, ∂n/∂θ)`.
-    grads: Vec<(usize, DVec3, DVec3)>,
-    /// `(param, ∂ ln(area)/∂θ)` of the object's area measure.
-    area: Vec<(usize, f64)>,
-    /// `∂x/∂u`, `∂n/∂u` of a surface point's tangent parameterisation.
-    dx_du: [DVec3; 2],
-    dn_du: [DVec3; 2],
-}
-
-impl Placed {
-    fn d(&self, k: usize) -> Moving {
-        let (dx, dn) = self
-            .grads
-            .iter()
-            .filter(|g| g.0 == k)
-            .fold((DVec3::ZERO, DVec3::ZERO), |a, g| (a.0 + g.1, a.1 + g.2));
-        Moving {
-            x: self.x,
-            dx,
-            n: self.n,
-            dn,
-        }
-    }
-
-    /// The gradient entry of parameter `k` after the tangent step `du`.
-    fn stepped(&self, k: usize, m: &Moving, du: DVec2) -> (usize, DVec3, DVec3) {
-        (
-            k,
-            m.dx + self.dx_du[0] * du.x + self.dx_du[1] * du.y,
-            m.dn + self.dn_du[0] * du.x + self.dn_du[1] * du.y,
-        )
-    }
-
-    fn area_rate(&self, k: usize) -> f64 {
-        self.area.iter().filter(|a| a.0 == k).map(|a| a.1).sum()
-    }
-}
-
-/// One node moving along one parameter.
-#[derive(Clone, Copy, Debug)]
-struct Moving {
-    x: DVec3,
-    dx: DVec3,
-    n: DVec3,
-    dn: DVec3,
-}
-
-impl Moving {
-    fn still(&self) -> bool {
-        self.dx == DVec3::ZERO && self.dn == DVec3::ZERO
-    }
-}
-
-/// A unit direction and its derivative.
-#[derive(Clone, Copy, Debug)]
-struct Dir {
-    w: DVec3,
-    dw: DVec3,
-}
-
-/// The direction from `a` to `b` and the segment's `∂ ln r`.
-fn toward(a: &Moving, b: &Moving) -> (Dir, f64) {
-    let (d, dd) = (b.x - a.x, b.dx - a.dx);
-    let len = d.length();
-    let w = d / len;
-    (
-        Dir {
-            w,
-            dw: (dd - w * w.dot(dd)) / len,
-        },
-        w.dot(dd) / len,
-    )
-}
-
-/// `(cos, ∂cos)` of `n·w`.
-fn cos(m: &Moving, w: &Dir) -> (f64, f64) {
-    (m.n.dot(w.w), m.dn.dot(w.w) + m.n.dot(w.dw))
 }
 
 /// `∂ ln(f(wi, wo)·|cos_o|)` per channel at a non-delta vertex.
@@ -186,127 +101,6 @@ fn local_pair(ci: f64, co: f64, cio: f64) -> [Vec3; 2] {
     ]
 }
 
-/// The anchored point `at` with the derivatives of its placement.
-fn surface(
-    scene: &Scene,
-    motion: &Motion,
-    at: &TrianglePoint,
-    scales: &[(usize, f64)],
-) -> Option<Placed> {
-    let object = scene.objects().get(at.object as usize)?;
-    let om = motion.objects.get(at.object as usize)?;
-    let anchor = Anchor::new(
-        object,
-        at.object,
-        at.triangle,
-        f64::from(at.b1),
-        f64::from(at.b2),
-        om,
-    )?;
-    let vs = anchor.eval(om, [0.0; 2]);
-    let grads = om
-        .grads
-        .iter()
-        .map(|g| {
-            let [dx, dn] = Anchor::dtheta(&vs, g);
-            (g.param, dx, dn)
-        })
-        .collect();
-    let area = om
-        .grads
-        .iter()
-        .filter_map(|g| {
-            scales
-                .iter()
-                .find(|s| s.0 == g.param)
-                .map(|s| (g.param, 2.0 / s.1))
-        })
-        .collect();
-    Some(Placed {
-        x: vs.x,
-        n: vs.n,
-        grads,
-        area,
-        dx_du: vs.dx_du,
-        dn_du: vs.dn_du,
-    })
-}
-
-/// Moves the pixel's vertex `x1` along its camera ray: at each parameter,
-/// the tangent step `du` that keeps its film position, `J_π ∂x/∂u du =
-/// −dp/dθ`. Fails when the ray grazes the surface.
-fn on_camera_ray(x1: &mut Placed, motion: &Motion) -> Result<(), DropReason> {
-    let pose = &motion.camera.pose;
-    let cols = x1.dx_du.map(|t| pose.pixel_derivative(x1.x, t, None));
-    let [Some(c0), Some(c1)] = cols else {
-        return Err(DropReason::BehindCamera);
-    };
-    let det = c0.perp_dot(c1);
-    if det.abs() < 1e-9 * c0.length_squared().max(c1.length_squared()) {
-        return Err(DropReason::Grazing);
-    }
-    let mut params: Vec<usize> = x1.grads.iter().map(|g| g.0).collect();
-    params.extend(motion.camera.grads.iter().map(|g| g.param));
-    let mut grads = Vec::with_capacity(params.len());
-    for k in sorted(params) {
-        let m = x1.d(k);
-        let dpose = motion
-            .camera
-            .grads
-            .iter()
-            .find(|g| g.param == k)
-            .map(|g| &g.pose);
-        let dp = pose
-            .pixel_derivative(x1.x, m.dx, dpose)
-            .ok_or(DropReason::BehindCamera)?;
-        // Solve [c0 c1] du = −dp.
-        let du = DVec2::new(-dp.perp_dot(c1), -c0.perp_dot(dp)) / det;
-        grads.push(x1.stepped(k, &m, du));
-    }
-    x1.grads = grads;
-    Ok(())
-}
-
-/// Moves vertex `next` along the ray a delta vertex `at` (reached from
-/// `prev`) scatters toward (see [`chain`]). Fails under total internal
-/// reflection or when the ray grazes `next`'s surface.
-fn on_scattered_ray(
-    next: &mut Placed,
-    at: &Placed,
-    prev: &Placed,
-    eta: f64,
-    transmit: bool,
-) -> Result<(), DropReason> {
-    let params = [prev, at, &*next]
-        .iter()
-        .flat_map(|p| p.grads.iter().map(|g| g.0))
-        .collect();
-    let mut grads = Vec::new();
-    for k in sorted(params) {
-        let (a, b, c) = (prev.d(k), at.d(k), next.d(k));
-        let (wi, _) = toward(&b, &a);
-        let [r, dr] = chain::scattered(wi.w, wi.dw, b.n, b.dn, eta, transmit)
-            .ok_or(DropReason::TotalInternalReflection)?;
-        let du = chain::ray_step(c.x - b.x, r, dr, c.dx - b.dx, next.dx_du)
-            .ok_or(DropReason::Grazing)?;
-        grads.push(next.stepped(k, &c, du));
-    }
-    next.grads = grads;
-    next.area.clear();
-    Ok(())
-}
-
-fn sorted(mut v: Vec<usize>) -> Vec<usize> {
-    v.sort_unstable();
-    v.dedup();
-    v
-}
-
-/// The delta lobe that scattered at `v`, if any.
-fn delta_lobe(v: &VertexRecord) -> Option<Lobe> {
-    v.lobe.filter(|l| l.is_delta())
-}
-
 /// The geometric colour derivatives of one record.
 pub(super) struct Geometric<'a> {
     pub(super) scene: &'a Scene,
@@ -317,106 +111,6 @@ pub(super) struct Geometric<'a> {
 }
 
 impl Geometric<'_> {
-    /// Whether anything on the record moves (camera, a vertex's object, a
-    /// light).
-    fn moves(&self, record: &PathRecord) -> bool {
-        let driven = |o: u32| {
-            self.motion
-                .objects
-                .get(o as usize)
-                .is_some_and(|m| !m.grads.is_empty())
-        };
-        !self.motion.camera.grads.is_empty()
-            || record.vertices.iter().any(|v| driven(v.at.object))
-            || record.connections.iter().any(|c| match c.light {
-                LightPoint::Area { object, .. } => driven(object),
-                LightPoint::Point { index } => self
-                    .motion
-                    .lights
-                    .get(index as usize)
-                    .is_some_and(|l| !l.grads.is_empty()),
-                LightPoint::Background => false,
-            })
-    }
-
-    /// The nodes of `record` (camera, vertices) and of its connections'
-    /// light points (`None` for the background).
-    fn place(&self, record: &PathRecord) -> Result<(Vec<Placed>, Vec<Option<Placed>>), DropReason> {
-        let cam = &self.motion.camera;
-        let mut nodes = vec![Placed {
-            x: crate::pixel::glam3(&cam.pose.origin),
-            grads: cam
-                .grads
-                .iter()
-                .map(|g| (g.param, crate::pixel::glam3(&g.pose.origin), DVec3::ZERO))
-                .collect(),
-            ..Placed::default()
-        }];
-        let on_rays = self.primary == PrimaryMotion::OnCameraRay;
-        for (i, v) in record.vertices.iter().enumerate() {
-            let mut p = surface(self.scene, self.motion, &v.at, self.scales)
-                .ok_or(DropReason::DegenerateTriangle)?;
-            if i == 0 {
-                p.area.clear();
-                if on_rays {
-                    on_camera_ray(&mut p, self.motion)?;
-                }
-            } else if let (true, Some(lobe)) = (on_rays, delta_lobe(&record.vertices[i - 1])) {
-                let eta = f64::from(record.vertices[i - 1].eta);
-                on_scattered_ray(
-                    &mut p,
-                    &nodes[i],
-                    &nodes[i - 1],
-                    eta,
-                    lobe.is_transmission(),
-                )?;
-            }
-            nodes.push(p);
-        }
-        let mut lights = Vec::with_capacity(record.connections.len());
-        for c in &record.connections {
-            lights.push(match c.light {
-                LightPoint::Area {
-                    object,
-                    triangle,
-                    b1,
-                    b2,
-                } => Some(
-                    surface(
-                        self.scene,
-                        self.motion,
-                        &TrianglePoint {
-                            object,
-                            triangle,
-                            b1,
-                            b2,
-                        },
-                        self.scales,
-                    )
-                    .ok_or(DropReason::DegenerateTriangle)?,
-                ),
-                LightPoint::Point { index } => {
-                    let l = self
-                        .motion
-                        .lights
-                        .get(index as usize)
-                        .ok_or(DropReason::NotDifferentiable)?;
-                    Some(Placed {
-                        x: l.position,
-                        grads: l
-                            .grads
-                            .iter()
-                            .map(|g| (g.param, g.dx, DVec3::ZERO))
-                            .collect(),
-                        ..Placed::default()
-                    })
-                }
-                LightPoint::Background => None,
-            });
-        }
-        Ok((nodes, lights))
-    }
-
     /// Adds `(param, ∂c/∂θ)` entries of `record` to `out`; counts the terms
     /// left out in `skipped`.
     pub(super) fn gradient(

@@ -9,9 +9,9 @@
 //!
 //! | parameter | derivative | where |
 //! |---|---|---|
-//! | `albedo.r/g/b` (diffuse) | exact | [`material`] |
-//! | `alpha` (rough conductor) | central difference | [`material`] |
-//! | `ior` (dielectric) | Fresnel weight, central difference (fixed directions) | [`material`] |
+//! | `albedo.r/g/b` (diffuse) | exact | `material.rs` |
+//! | `alpha` (rough conductor) | central difference | `material.rs` |
+//! | `ior` (dielectric) | Fresnel weight, central difference (fixed directions) | `material.rs` |
 //! | `emission` | exact: `∂c/∂s = c_e/s` for every term `c_e` the emitter emits | here |
 //! | translation, rotation, scale of objects and emitters; point lights; camera position, yaw, pitch | vertices move with θ: BSDF values, cosines, `1/r²`, area | [`geometry`] |
 //!
@@ -27,6 +27,8 @@
 mod chain;
 pub mod geometry;
 mod material;
+mod moving;
+mod place;
 
 use epsm_render::Scene;
 use epsm_render::frame::Frame;
