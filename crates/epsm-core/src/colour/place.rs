@@ -24,16 +24,8 @@ fn surface(
     at: &TrianglePoint,
     scales: &[(usize, f64)],
 ) -> Option<Placed> {
-    let object = scene.objects().get(at.object as usize)?;
     let om = motion.objects.get(at.object as usize)?;
-    let anchor = Anchor::new(
-        object,
-        at.object,
-        at.triangle,
-        f64::from(at.b1),
-        f64::from(at.b2),
-        om,
-    )?;
+    let anchor = Anchor::at_point(scene, motion, at)?;
     let vs = anchor.eval(om, [0.0; 2]);
     let grads = om
         .grads
