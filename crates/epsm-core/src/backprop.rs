@@ -2,7 +2,8 @@
 //! the loss's per-pixel gradients to `dL/dθ`.
 //!
 //! For every recorded path sample of a pixel with a non-zero gradient:
-//! - **colour**: `dL/dθ += g_rgb · dc/dθ / spp` ([`ColourModel`]);
+//! - **colour**: `dL/dθ += g_rgb · dc/dθ / spp` ([`ColourModel`]; terms it
+//!   cannot differentiate are counted with the drops);
 //! - **position**: the record is classified into differentiable paths
 //!   ([`classify`]); the pixel's `g_xy` is shared among them in proportion
 //!   to each path's share of the pixel's luminance (a shadow counts with the

@@ -12,11 +12,13 @@
 //! meshes). The plane extends beyond the triangle's edges: fine for local
 //! derivatives.
 
+use epsm_render::Scene;
 use epsm_render::frame::basis_f64;
+use epsm_render::record::TrianglePoint;
 use epsm_render::scene::{Object, ObjectId};
 use glam::DVec3;
 
-use crate::motion::{AffineGrad, ObjectMotion};
+use crate::motion::{AffineGrad, Motion, ObjectMotion};
 
 /// A vertex anchored on a triangle, in object space.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -105,6 +107,19 @@ impl Anchor {
             n_obj,
             n_du,
         })
+    }
+
+    /// The anchor of the recorded point `at` of `scene`, tangents built in
+    /// `motion`. `None` as for [`Anchor::new`], or for an unknown object.
+    pub fn at_point(scene: &Scene, motion: &Motion, at: &TrianglePoint) -> Option<Self> {
+        Self::new(
+            scene.objects().get(at.object as usize)?,
+            at.object,
+            at.triangle,
+            f64::from(at.b1),
+            f64::from(at.b2),
+            motion.objects.get(at.object as usize)?,
+        )
     }
 
     /// Position, normal and `u`-derivatives at `u` in placement `om`.

@@ -3,7 +3,7 @@
 //! vertices move with θ and visibility stays as recorded.
 //!
 //! Vertex motion comes from the motion model ([`crate::motion`] through
-//! [`Anchor`]): every surface vertex and area-light point keeps its local
+//! [`crate::vertex::Anchor`]): every surface vertex and area-light point keeps its local
 //! coordinates on its object (area measure, `x = M(θ)·p_obj`, the shading
 //! normal turning with `M`); the camera eye and point lights move with
 //! their parameters. The vertex the pixel sees moves in one of two ways
@@ -26,21 +26,26 @@
 //! | `s²` (area) | a vertex or light point on an object of scale `s` | `2 ∂s/s` |
 //!
 //! Camera importance and emitted radiance (Lambertian emitters) are
-//! constant; for the escaped radiance the last vertex's own factor (its
-//! escape direction is not recorded) is held fixed. A delta (specular)
-//! vertex whose position or neighbours move would need the chain's
-//! manifold motion: terms past it are left out for that parameter and
-//! counted ([`DropReason::NotDifferentiable`]).
+//! constant; for the escaped radiance the last non-delta vertex's own
+//! factor (its escape direction is not recorded) and the background are
+//! held fixed. Delta (specular) vertices: with the camera-ray convention the
+//! vertex after a mirror or glass interface stays on the scattered ray and
+//! the lobe's Fresnel weight changes with `cos θi` (`chain.rs`); with the
+//! attached convention their motion is the manifold's (carried by `dp/dθ`),
+//! so terms past a delta vertex whose neighbourhood moves are left out for
+//! that parameter and counted ([`DropReason::NotDifferentiable`]).
 
 use epsm_render::Scene;
-use epsm_render::lights::LightPoint;
-use epsm_render::materials::{Bsdf, Material, VertexKind};
-use epsm_render::record::{PathRecord, TrianglePoint};
-use glam::{DVec2, DVec3, Vec2, Vec3};
+use epsm_render::materials::{Bsdf, Material};
+use epsm_render::record::PathRecord;
+use glam::{DVec3, Vec2, Vec3};
 
 use crate::drops::{DropCounts, DropReason};
 use crate::motion::Motion;
-use crate::vertex::Anchor;
+
+use super::chain;
+use super::moving::{Dir, Moving, Placed, cos, toward};
+use super::place::delta_lobe;
 
 /// How the vertex a pixel sees moves with θ.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -51,79 +56,6 @@ pub enum PrimaryMotion {
     /// Along the pixel's fixed film position: the conventional renderer's
     /// camera ray.
     OnCameraRay,
-}
-
-/// A node's position and normal at θ and their derivatives.
-#[derive(Clone, Debug, Default)]
-struct Placed {
-    x: DVec3,
-    /// Unit normal (zero for the camera and point lights).
-    n: DVec3,
-    /// `(param, ∂x/∂θ, ∂n/∂θ)`.
-    grads: Vec<(usize, DVec3, DVec3)>,
-    /// `(param, ∂ ln(area)/∂θ)` of the object's area measure.
-    area: Vec<(usize, f64)>,
-}
-
-impl Placed {
-    fn d(&self, k: usize) -> Moving {
-        let (dx, dn) = self
-            .grads
-            .iter()
-            .filter(|g| g.0 == k)
-            .fold((DVec3::ZERO, DVec3::ZERO), |a, g| (a.0 + g.1, a.1 + g.2));
-        Moving {
-            x: self.x,
-            dx,
-            n: self.n,
-            dn,
-        }
-    }
-
-    fn area_rate(&self, k: usize) -> f64 {
-        self.area.iter().filter(|a| a.0 == k).map(|a| a.1).sum()
-    }
-}
-
-/// One node moving along one parameter.
-#[derive(Clone, Copy, Debug)]
-struct Moving {
-    x: DVec3,
-    dx: DVec3,
-    n: DVec3,
-    dn: DVec3,
-}
-
-impl Moving {
-    fn still(&self) -> bool {
-        self.dx == DVec3::ZERO && self.dn == DVec3::ZERO
-    }
-}
-
-/// A unit direction and its derivative.
-#[derive(Clone, Copy, Debug)]
-struct Dir {
-    w: DVec3,
-    dw: DVec3,
-}
-
-/// The direction from `a` to `b` and the segment's `∂ ln r`.
-fn toward(a: &Moving, b: &Moving) -> (Dir, f64) {
-    let (d, dd) = (b.x - a.x, b.dx - a.dx);
-    let len = d.length();
-    let w = d / len;
-    (
-        Dir {
-            w,
-            dw: (dd - w * w.dot(dd)) / len,
-        },
-        w.dot(dd) / len,
-    )
-}
-
-/// `(cos, ∂cos)` of `n·w`.
-fn cos(m: &Moving, w: &Dir) -> (f64, f64) {
-    (m.n.dot(w.w), m.dn.dot(w.w) + m.n.dot(w.dw))
 }
 
 /// `∂ ln(f(wi, wo)·|cos_o|)` per channel at a non-delta vertex.
@@ -169,105 +101,6 @@ fn local_pair(ci: f64, co: f64, cio: f64) -> [Vec3; 2] {
     ]
 }
 
-/// The anchored point `at` with the derivatives of its placement.
-fn surface(
-    scene: &Scene,
-    motion: &Motion,
-    at: &TrianglePoint,
-    scales: &[(usize, f64)],
-) -> Option<Placed> {
-    let object = scene.objects().get(at.object as usize)?;
-    let om = motion.objects.get(at.object as usize)?;
-    let anchor = Anchor::new(
-        object,
-        at.object,
-        at.triangle,
-        f64::from(at.b1),
-        f64::from(at.b2),
-        om,
-    )?;
-    let vs = anchor.eval(om, [0.0; 2]);
-    let grads = om
-        .grads
-        .iter()
-        .map(|g| {
-            let [dx, dn] = Anchor::dtheta(&vs, g);
-            (g.param, dx, dn)
-        })
-        .collect();
-    let area = om
-        .grads
-        .iter()
-        .filter_map(|g| {
-            scales
-                .iter()
-                .find(|s| s.0 == g.param)
-                .map(|s| (g.param, 2.0 / s.1))
-        })
-        .collect();
-    Some(Placed {
-        x: vs.x,
-        n: vs.n,
-        grads,
-        area,
-    })
-}
-
-/// Moves the pixel's vertex `x1` along its camera ray: at each parameter,
-/// the tangent step `du` that keeps its film position, `J_π ∂x/∂u du =
-/// −dp/dθ`. `None` when the ray grazes the surface.
-fn on_camera_ray(
-    x1: &mut Placed,
-    scene: &Scene,
-    motion: &Motion,
-    at: &TrianglePoint,
-) -> Option<()> {
-    let om = motion.objects.get(at.object as usize)?;
-    let object = scene.objects().get(at.object as usize)?;
-    let anchor = Anchor::new(
-        object,
-        at.object,
-        at.triangle,
-        f64::from(at.b1),
-        f64::from(at.b2),
-        om,
-    )?;
-    let vs = anchor.eval(om, [0.0; 2]);
-    let pose = &motion.camera.pose;
-    let cols = vs.dx_du.map(|t| pose.pixel_derivative(vs.x, t, None));
-    let [Some(c0), Some(c1)] = cols else {
-        return None;
-    };
-    let det = c0.perp_dot(c1);
-    if det.abs() < 1e-9 * c0.length_squared().max(c1.length_squared()) {
-        return None;
-    }
-    let mut params: Vec<usize> = x1.grads.iter().map(|g| g.0).collect();
-    params.extend(motion.camera.grads.iter().map(|g| g.param));
-    params.sort_unstable();
-    params.dedup();
-    let mut grads = Vec::with_capacity(params.len());
-    for k in params {
-        let m = x1.d(k);
-        let dpose = motion
-            .camera
-            .grads
-            .iter()
-            .find(|g| g.param == k)
-            .map(|g| &g.pose);
-        let dp = pose.pixel_derivative(vs.x, m.dx, dpose)?;
-        // Solve [c0 c1] du = −dp.
-        let du = DVec2::new(-dp.perp_dot(c1), -c0.perp_dot(dp)) / det;
-        grads.push((
-            k,
-            m.dx + vs.dx_du[0] * du.x + vs.dx_du[1] * du.y,
-            m.dn + vs.dn_du[0] * du.x + vs.dn_du[1] * du.y,
-        ));
-    }
-    x1.grads = grads;
-    Some(())
-}
-
 /// The geometric colour derivatives of one record.
 pub(super) struct Geometric<'a> {
     pub(super) scene: &'a Scene,
@@ -278,88 +111,6 @@ pub(super) struct Geometric<'a> {
 }
 
 impl Geometric<'_> {
-    /// Whether anything on the record moves (camera, a vertex's object, a
-    /// light).
-    fn moves(&self, record: &PathRecord) -> bool {
-        let driven = |o: u32| {
-            self.motion
-                .objects
-                .get(o as usize)
-                .is_some_and(|m| !m.grads.is_empty())
-        };
-        !self.motion.camera.grads.is_empty()
-            || record.vertices.iter().any(|v| driven(v.at.object))
-            || record.connections.iter().any(|c| match c.light {
-                LightPoint::Area { object, .. } => driven(object),
-                LightPoint::Point { index } => self
-                    .motion
-                    .lights
-                    .get(index as usize)
-                    .is_some_and(|l| !l.grads.is_empty()),
-                LightPoint::Background => false,
-            })
-    }
-
-    /// The nodes of `record` (camera, vertices) and of its connections'
-    /// light points (`None` for the background).
-    fn place(&self, record: &PathRecord) -> Option<(Vec<Placed>, Vec<Option<Placed>>)> {
-        let cam = &self.motion.camera;
-        let mut nodes = vec![Placed {
-            x: crate::pixel::glam3(&cam.pose.origin),
-            grads: cam
-                .grads
-                .iter()
-                .map(|g| (g.param, crate::pixel::glam3(&g.pose.origin), DVec3::ZERO))
-                .collect(),
-            ..Placed::default()
-        }];
-        for (i, v) in record.vertices.iter().enumerate() {
-            let mut p = surface(self.scene, self.motion, &v.at, self.scales)?;
-            if i == 0 {
-                p.area.clear();
-                if self.primary == PrimaryMotion::OnCameraRay {
-                    on_camera_ray(&mut p, self.scene, self.motion, &v.at)?;
-                }
-            }
-            nodes.push(p);
-        }
-        let mut lights = Vec::with_capacity(record.connections.len());
-        for c in &record.connections {
-            lights.push(match c.light {
-                LightPoint::Area {
-                    object,
-                    triangle,
-                    b1,
-                    b2,
-                } => Some(surface(
-                    self.scene,
-                    self.motion,
-                    &TrianglePoint {
-                        object,
-                        triangle,
-                        b1,
-                        b2,
-                    },
-                    self.scales,
-                )?),
-                LightPoint::Point { index } => {
-                    let l = self.motion.lights.get(index as usize)?;
-                    Some(Placed {
-                        x: l.position,
-                        grads: l
-                            .grads
-                            .iter()
-                            .map(|g| (g.param, g.dx, DVec3::ZERO))
-                            .collect(),
-                        ..Placed::default()
-                    })
-                }
-                LightPoint::Background => None,
-            });
-        }
-        Some((nodes, lights))
-    }
-
     /// Adds `(param, ∂c/∂θ)` entries of `record` to `out`; counts the terms
     /// left out in `skipped`.
     pub(super) fn gradient(
@@ -371,9 +122,12 @@ impl Geometric<'_> {
         if !self.moves(record) {
             return;
         }
-        let Some((nodes, lights)) = self.place(record) else {
-            skipped.add(DropReason::DegenerateTriangle);
-            return;
+        let (nodes, lights) = match self.place(record) {
+            Ok(placed) => placed,
+            Err(reason) => {
+                skipped.add(reason);
+                return;
+            }
         };
         let mut params: Vec<usize> = nodes
             .iter()
@@ -424,8 +178,12 @@ impl Geometric<'_> {
                 skipped.add(DropReason::DegenerateTriangle);
                 return;
             };
-            let delta = v[i].kind == VertexKind::Specular;
-            if delta && (m[j - 1..nodes.len().min(j + 2)].iter().any(|n| !n.still())) {
+            let delta = delta_lobe(&v[i]);
+            let on_rays = self.primary == PrimaryMotion::OnCameraRay;
+            if delta.is_some()
+                && !on_rays
+                && m[j - 1..nodes.len().min(j + 2)].iter().any(|n| !n.still())
+            {
                 valid = false;
             }
             if !valid {
@@ -460,14 +218,22 @@ impl Geometric<'_> {
                 };
                 sum += c.contribution * (prefix + rate);
             }
-            // The segment to the next vertex.
-            if let Some(next) = m.get(j + 1)
-                && !delta
-            {
-                let (wo, dr) = toward(&m[j], next);
-                let (cn, dcn) = cos(next, &wo);
-                prefix += bsdf_rate(mat, &m[j], &wi, &wo)
-                    + Vec3::splat((dcn / cn - 2.0 * dr + nodes[j + 1].area_rate(k)) as f32);
+            // The segment to the next vertex: the lobe's weight at a delta
+            // vertex (the next vertex lies on its ray), else the BSDF and
+            // the area-measure geometry.
+            match (m.get(j + 1), delta) {
+                (_, Some(lobe)) => {
+                    let (c, dc) = cos(&m[j], &wi);
+                    let rate = chain::weight_rate(mat, lobe, v[i].eta, c, dc);
+                    prefix += Vec3::splat(rate as f32);
+                }
+                (Some(next), None) => {
+                    let (wo, dr) = toward(&m[j], next);
+                    let (cn, dcn) = cos(next, &wo);
+                    prefix += bsdf_rate(mat, &m[j], &wi, &wo)
+                        + Vec3::splat((dcn / cn - 2.0 * dr + nodes[j + 1].area_rate(k)) as f32);
+                }
+                (None, _) => {}
             }
         }
         if valid {

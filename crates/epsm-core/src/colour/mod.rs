@@ -9,19 +9,26 @@
 //!
 //! | parameter | derivative | where |
 //! |---|---|---|
-//! | `albedo.r/g/b` (diffuse) | exact | [`material`] |
-//! | `alpha` (rough conductor) | central difference | [`material`] |
-//! | `ior` (dielectric) | Fresnel weight, central difference (fixed directions) | [`material`] |
+//! | `albedo.r/g/b` (diffuse) | exact | `material.rs` |
+//! | `alpha` (rough conductor) | central difference | `material.rs` |
+//! | `ior` (dielectric) | Fresnel weight, central difference (fixed directions) | `material.rs` |
 //! | `emission` | exact: `∂c/∂s = c_e/s` for every term `c_e` the emitter emits | here |
 //! | translation, rotation, scale of objects and emitters; point lights; camera position, yaw, pitch | vertices move with θ: BSDF values, cosines, `1/r²`, area | [`geometry`] |
 //!
 //! Geometric terms are built only when the model is made with a
-//! [`PrimaryMotion`] (the method decides; see [`crate::schedule`]). Terms
+//! [`PrimaryMotion`]. The optimisation loop asks for them in L2 iterations
+//! ([`PrimaryMotion::OnCameraRay`]): with OT, colour gradients point at
+//! matched colours, and on the layout problem adding the geometric shading
+//! terms ([`PrimaryMotion::Attached`]) slowed the translations and did not
+//! stop the rotation's drift. Terms
 //! that cannot be differentiated (a moving delta vertex: its motion is the
 //! manifold's, carried by `dp/dθ`) are counted, never silently dropped.
 
+mod chain;
 pub mod geometry;
 mod material;
+mod moving;
+mod place;
 
 use epsm_render::Scene;
 use epsm_render::frame::Frame;

@@ -23,19 +23,7 @@ fn surface(
     at: &TrianglePoint,
     unknown: Option<usize>,
 ) -> Result<Node, DropReason> {
-    let object = scene
-        .objects()
-        .get(at.object as usize)
-        .ok_or(DropReason::DegenerateTriangle)?;
-    let anchor = Anchor::new(
-        object,
-        at.object,
-        at.triangle,
-        f64::from(at.b1),
-        f64::from(at.b2),
-        motion.object(at.object),
-    )
-    .ok_or(DropReason::DegenerateTriangle)?;
+    let anchor = Anchor::at_point(scene, motion, at).ok_or(DropReason::DegenerateTriangle)?;
     Ok(Node::Surface { anchor, unknown })
 }
 

@@ -1,0 +1,133 @@
+//! Delta (specular) vertices in the L2 convention: the vertex after a
+//! mirror or glass interface stays on the ray the interface scatters
+//! toward, as a conventional renderer re-tracing fixed sample numbers
+//! would find it (the pixel's own vertex stays on its camera ray the same
+//! way, [`super::geometry`]).
+//!
+//! The scattered direction `r(wi, n)` (mirror reflection, or Snell
+//! refraction with the recorded relative IOR `η`) is differentiated by
+//! forward-mode duals; the next vertex's tangent step `du` then solves
+//! `P⊥(∂x/∂u du) = t·dr − P⊥(dx_attached − dx_prev)` on the two directions
+//! perpendicular to `r` (`t` = segment length, `P⊥ = I − r rᵀ`). The delta
+//! lobe's weight over its fixed choice probability is `F(cos θi)` or
+//! `(1 − F)/η²` for a dielectric and the constant tint for a conductor.
+
+use epsm_render::frame::basis_f64;
+use epsm_render::materials::fresnel::fresnel_dielectric;
+use epsm_render::materials::{Bsdf, Lobe, Material};
+use glam::{DVec2, DVec3};
+use nalgebra::{RealField, Vector3};
+use num_dual::Dual64;
+
+/// The direction `wi` (unit, away from the surface) scatters into at a
+/// surface of unit normal `n`: mirror reflection, or refraction with
+/// relative IOR `eta` (`η(wo side)/η(wi side)`). `None` under total
+/// internal reflection.
+fn scatter<T: RealField + Copy>(
+    wi: &Vector3<T>,
+    n: &Vector3<T>,
+    eta: f64,
+    transmit: bool,
+) -> Option<Vector3<T>> {
+    let c = n.dot(wi);
+    let two: T = nalgebra::convert(2.0);
+    if !transmit {
+        return Some(n * (c * two) - wi);
+    }
+    // The normal on the side of wi.
+    let (n, c) = if c >= T::zero() { (*n, c) } else { (-n, -c) };
+    let inv: T = nalgebra::convert(1.0 / eta);
+    let s2 = inv * inv * (T::one() - c * c);
+    if s2 >= T::one() {
+        return None;
+    }
+    let ct = (T::one() - s2).sqrt();
+    Some(-wi * inv + n * (inv * c - ct))
+}
+
+fn dual(v: DVec3, d: DVec3) -> Vector3<Dual64> {
+    Vector3::new(
+        Dual64::new(v.x, d.x),
+        Dual64::new(v.y, d.y),
+        Dual64::new(v.z, d.z),
+    )
+}
+
+/// The scattered direction at a delta vertex and its derivative, given
+/// `wi` and the normal with their derivatives.
+pub(super) fn scattered(
+    wi: DVec3,
+    dwi: DVec3,
+    n: DVec3,
+    dn: DVec3,
+    eta: f64,
+    transmit: bool,
+) -> Option<[DVec3; 2]> {
+    let r = scatter(&dual(wi, dwi), &dual(n, dn), eta, transmit)?;
+    Some([
+        DVec3::new(r[0].re, r[1].re, r[2].re),
+        DVec3::new(r[0].eps, r[1].eps, r[2].eps),
+    ])
+}
+
+/// The tangent step `du` keeping the next vertex on the scattered ray:
+/// `delta = x_next − x_delta` at θ, `r, dr` the direction and its
+/// derivative, `d_rel = dx_next(attached) − dx_delta`, `dx_du` the next
+/// vertex's tangents. `None` when the ray grazes the next surface.
+pub(super) fn ray_step(
+    delta: DVec3,
+    r: DVec3,
+    dr: DVec3,
+    d_rel: DVec3,
+    dx_du: [DVec3; 2],
+) -> Option<DVec2> {
+    let t = delta.dot(r);
+    let (e1, e2) = basis_f64(r);
+    let rhs = r_perp(t * dr - d_rel, e1, e2);
+    let [a, b] = dx_du.map(|v| r_perp(v, e1, e2));
+    let det = a.perp_dot(b);
+    if det.abs() < 1e-9 * a.length_squared().max(b.length_squared()) {
+        return None;
+    }
+    Some(DVec2::new(rhs.perp_dot(b), a.perp_dot(rhs)) / det)
+}
+
+fn r_perp(v: DVec3, e1: DVec3, e2: DVec3) -> DVec2 {
+    DVec2::new(e1.dot(v), e2.dot(v))
+}
+
+/// `∂ ln w/∂θ` of a delta lobe's weight with `cos θi` changing at rate
+/// `dcos` (`cos` signed: negative from inside a dielectric).
+pub(super) fn weight_rate(material: &Material, lobe: Lobe, eta: f32, cos: f64, dcos: f64) -> f64 {
+    let Bsdf::Dielectric(_) = material.bsdf else {
+        return 0.0;
+    };
+    let w = |c: f64| {
+        let f = f64::from(fresnel_dielectric(
+            c.abs() as f32,
+            eta_of(lobe, eta, cos, material),
+        ));
+        if lobe.is_transmission() { 1.0 - f } else { f }
+    };
+    let h = 1e-3 * cos.abs().max(1e-2);
+    let (p, m) = (w(cos + h), w(cos - h));
+    if p <= 0.0 || m <= 0.0 {
+        return 0.0;
+    }
+    (p.ln() - m.ln()) / (2.0 * h) * dcos
+}
+
+/// The relative IOR `η(transmitted side)/η(wi side)` the Fresnel term uses.
+fn eta_of(lobe: Lobe, eta: f32, cos: f64, material: &Material) -> f32 {
+    match (&material.bsdf, lobe.is_transmission()) {
+        (_, true) => eta,
+        (Bsdf::Dielectric(d), false) => {
+            if cos >= 0.0 {
+                d.ior
+            } else {
+                1.0 / d.ior
+            }
+        }
+        _ => 1.0,
+    }
+}
