@@ -10,6 +10,9 @@
 //!   pixel centre over the image size. Rendered and target clouds are matched
 //!   by epsm-ot's exact or entropic solver; `L = 1/n Σ ‖P_i − T_i‖²`.
 //! - **L2**: `L = 1/(3n) Σ (c − c*)²` on linear colours; `g_xy = 0`.
+//! - **Colour flow** (`flow = true`, [`add_flow`]): adds to each pixel's
+//!   `g_xy` the derivative of the loss when the pixel's content moves
+//!   (needed for camera moves, which shift the whole image).
 //!
 //! | key (`[loss]`) | unit | default | range |
 //! |---|---|---|---|
@@ -17,6 +20,7 @@
 //! | `lambda` | — | 1 | > 0 |
 //! | `match_resolution` | pixels | `[64, 64]` | each in [4, 512] |
 //! | `blur` | point units | 0.01 | > 0 (Sinkhorn only) |
+//! | `flow` | — | `false` | `true`, `false` |
 
 use epsm_ot::{Matcher, PointCloud, SinkhornSettings};
 use epsm_render::Image;
@@ -141,6 +145,43 @@ pub fn evaluate(kind: LossKind, image: &Image, target: &Image, lambda: f64) -> O
     })
 }
 
+/// Adds the colour-flow term to `eval.g_xy`: per pixel `−(∂c/∂p)ᵀ g_rgb`,
+/// what the loss gains when the pixel's content moves by `δp` (the colour
+/// at the fixed pixel then changes by `−∂c/∂p · δp`), with `∂c/∂p` (linear
+/// colour per film pixel) from central differences of the pixel's
+/// neighbours in `image` (one-sided at the border).
+///
+/// The OT's own `g_xy` sum to zero over the image (both clouds are the same
+/// pixel grid and every point is matched once), so a parameter that moves
+/// the whole image uniformly (a camera yaw or translation) gets no gradient
+/// from them, only from how unevenly it moves the pixels; this term is the
+/// derivative of the loss at fixed pixel positions and gives such moves
+/// their gradient. It is a finite difference of a noisy render, so problems
+/// whose effect is small and bright (highlights) are better without it.
+pub fn add_flow(image: &Image, eval: &mut LossEval) -> OptResult<()> {
+    let (w, h) = (image.width, image.height);
+    if (w, h) != (eval.width, eval.height) {
+        return Err(OptimizeError::Invalid(format!(
+            "colour flow: image is {w}x{h} but the loss is {}x{}",
+            eval.width, eval.height
+        )));
+    }
+    let (g_rgb, g_xy) = (&eval.g_rgb, &mut eval.g_xy);
+    let diff = |a: Vec3, b: Vec3, span: u32| (a - b) / span as f32;
+    for y in 0..h {
+        for x in 0..w {
+            let (x0, x1) = (x.saturating_sub(1), (x + 1).min(w - 1));
+            let (y0, y1) = (y.saturating_sub(1), (y + 1).min(h - 1));
+            let dx = diff(image.get(x1, y), image.get(x0, y), (x1 - x0).max(1));
+            let dy = diff(image.get(x, y1), image.get(x, y0), (y1 - y0).max(1));
+            let i = (y * w + x) as usize;
+            let g = g_rgb[i];
+            g_xy[i] -= DVec2::new(f64::from(dx.dot(g)), f64::from(dy.dot(g)));
+        }
+    }
+    Ok(())
+}
+
 fn l2(image: &Image, target: &Image) -> LossEval {
     let n = image.pixels.len() as f32;
     let mut value = 0.0f64;
@@ -241,6 +282,46 @@ mod tests {
         let fd = (at(h) - at(-h)) / f64::from(2.0 * h);
         assert!((fd - f64::from(e.g_rgb[5].x)).abs() < 1e-3 * fd.abs().max(1e-3));
         assert!((rmse(&img, &img)).abs() < 1e-12);
+    }
+
+    /// A smooth blob centred at `cx` (pixels) on a dim background.
+    fn blob(cx: f32) -> Image {
+        let mut img = Image::new(16, 16);
+        for y in 0..16 {
+            for x in 0..16 {
+                let d2 = (x as f32 + 0.5 - cx).powi(2) + (y as f32 + 0.5 - 8.0).powi(2);
+                img.set(
+                    x,
+                    y,
+                    Vec3::new(0.1, 0.1, 0.1) + Vec3::new(3.0, 2.0, 1.0) * (-d2 / 8.0).exp(),
+                );
+            }
+        }
+        img
+    }
+
+    #[test]
+    fn colour_flow_gives_a_uniform_shift_its_finite_difference() {
+        // The render is the target shifted right by `s` pixels: every pixel's
+        // content moves with dp/ds = (1, 0), so dL/ds = Σ g_xy.x.
+        let (target, s, h) = (blob(8.0), 1.5f32, 0.02f32);
+        let at = |shift: f32| {
+            evaluate(LossKind::OtExact, &blob(8.0 + shift), &target, 1.0).expect("loss")
+        };
+        let fd = (at(s + h).value - at(s - h).value) / f64::from(2.0 * h);
+        let mut e = at(s);
+        let ot_sum: f64 = e.g_xy.iter().map(|g| g.x).sum();
+        let ot_abs: f64 = e.g_xy.iter().map(|g| g.x.abs()).sum();
+        // The OT's own screen gradients cancel: blind to a uniform shift.
+        assert!(ot_sum.abs() < 1e-4 * ot_abs, "{ot_sum} of {ot_abs}");
+        add_flow(&blob(8.0 + s), &mut e).expect("same size");
+        let flow_sum: f64 = e.g_xy.iter().map(|g| g.x).sum();
+        assert!(fd > 0.0, "moving the blob away raises the loss: {fd}");
+        assert!(
+            (flow_sum - fd).abs() < 0.1 * fd,
+            "flow {flow_sum} vs fd {fd}"
+        );
+        assert!(add_flow(&Image::new(3, 3), &mut e).is_err());
     }
 
     #[test]

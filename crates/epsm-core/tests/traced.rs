@@ -1,5 +1,5 @@
 //! Newton agreement on paths traced by the renderer in the shipped scenes
-//! (translations and rotations of every object, point-light and camera
+//! (translations and rotations about x and y of every object, point-light and camera
 //! moves), per path type.
 
 use std::path::Path;
@@ -21,9 +21,11 @@ fn check_scene(name: &str, expected: &[PathKind]) {
     let mut table = ParamTable::new(&scene);
     table.add_default_geometry().expect("default parameters");
     for o in scene.objects() {
-        table
-            .add(&format!("{}.rotate.y", o.name))
-            .expect("rotation");
+        for axis in ["x", "y"] {
+            table
+                .add(&format!("{}.rotate.{axis}", o.name))
+                .expect("rotation");
+        }
     }
     table.add("camera.yaw").expect("camera yaw");
     let opts = RenderOptions::from_scene(&scene);

@@ -105,6 +105,9 @@ pub struct LossDesc {
     pub match_resolution: [u32; 2],
     /// Blur (ε = blur²) of the Sinkhorn solver.
     pub blur: f64,
+    /// Whether the OT's screen-position gradients get the colour-flow term
+    /// ([`crate::loss::add_flow`]).
+    pub flow: bool,
 }
 
 impl Default for LossDesc {
@@ -114,6 +117,7 @@ impl Default for LossDesc {
             lambda: 1.0,
             match_resolution: [64, 64],
             blur: 0.01,
+            flow: false,
         }
     }
 }

@@ -88,6 +88,9 @@ pub struct LossSettings {
     pub lambda: f64,
     /// `[width, height]` of the matching and the gradient pass.
     pub match_resolution: [u32; 2],
+    /// Whether the OT's screen-position gradients get the colour-flow term
+    /// ([`crate::loss::add_flow`]; for camera moves).
+    pub flow: bool,
 }
 
 /// The optimizer and schedule settings.
@@ -160,6 +163,7 @@ impl Problem {
                 kind: LossKind::OtExact,
                 lambda: loss.lambda,
                 match_resolution: loss.match_resolution,
+                flow: loss.flow,
             },
             optimizer: OptimizerSettings {
                 method: Method::Epsm,

@@ -216,6 +216,7 @@ pub(super) fn problem(d: &ProblemDesc, file: &Path, locator: &Locator) -> OptRes
             kind,
             lambda: c.check("loss.lambda", l.lambda, l.lambda > 0.0, "a positive number")?,
             match_resolution: [mw, mh],
+            flow: l.flow,
         },
         optimizer,
         passes: Passes {

@@ -41,7 +41,7 @@ pub use error::{OptResult, OptimizeError};
 
 use crate::backprop::{PassInput, PassStats, backprop, record_level};
 use crate::colour::{ColourModel, PrimaryMotion};
-use crate::loss::{LossEval, evaluate, resample, rmse};
+use crate::loss::{LossEval, add_flow, evaluate, resample, rmse};
 use crate::optim::{Adam, AdamSettings};
 use crate::params::ParamTable;
 use crate::problem::{Problem, Target};
@@ -266,12 +266,11 @@ impl Optimization {
             out.image.clone()
         };
         let t1 = Instant::now();
-        let loss = evaluate(
-            self.schedule.loss_at(self.iteration),
-            &image,
-            &self.target_match,
-            self.problem.loss.lambda,
-        )?;
+        let kind = self.schedule.loss_at(self.iteration);
+        let mut loss = evaluate(kind, &image, &self.target_match, self.problem.loss.lambda)?;
+        if self.problem.loss.flow && kind.is_ot() {
+            add_flow(&image, &mut loss)?;
+        }
         let t2 = Instant::now();
         let input = PassInput {
             scene: &self.grad.scene,
