@@ -32,10 +32,13 @@ fi
 display=:97
 Xvfb "$display" -screen 0 1600x1000x24 -nolisten tcp &
 xvfb=$!
-trap 'kill "$xvfb" 2> /dev/null || true' EXIT
+config=$(mktemp -d)
+trap 'kill "$xvfb" 2> /dev/null || true; rm -rf "$config"' EXIT
 sleep 1
-# Software rendering; no accessibility bus on a bare X server.
-DISPLAY=$display LIBGL_ALWAYS_SOFTWARE=1 NO_AT_BRIDGE=1 \
+# Software rendering; no accessibility bus on a bare X server; a throwaway
+# recent-files list.
+XDG_CONFIG_HOME=$config DISPLAY=$display LIBGL_ALWAYS_SOFTWARE=1 NO_AT_BRIDGE=1 \
   timeout 900 "$viewer" "$problem" \
-  --autorun "$iterations" --screenshot "$out" --size 1560x960
+  --autorun "$iterations" --screenshot "$out" --size 1560x960 \
+  --overlay arrows,flow,matching
 echo "saved $out"

@@ -27,6 +27,8 @@ pub struct Options {
     pub screenshot: Option<PathBuf>,
     /// Where the recent-files list is kept (`None`: not kept).
     pub recent_file: Option<PathBuf>,
+    /// The overlay layers shown at start.
+    pub overlay: OverlaySettings,
 }
 
 /// The UI-side state of the controls panel.
@@ -80,7 +82,7 @@ impl ViewerApp {
                 lr_scale: 1.0,
                 overlay_param: None,
             },
-            overlay: OverlaySettings::default(),
+            overlay: options.overlay,
             recent: Recent::load(options.recent_file),
             autorun: options.autorun,
             screenshot: options

@@ -1,11 +1,13 @@
 //! `epsm-viewer [problem.toml]`: opens the viewer window (eframe, glow
 //! renderer). Flags: `--autorun N` runs N iterations once the problem is
-//! loaded; `--screenshot PATH` then saves a PNG of the window and quits.
+//! loaded; `--screenshot PATH` then saves a PNG of the window and quits;
+//! `--overlay arrows,flow,heat,matching` chooses the overlay layers shown.
 
 use std::path::PathBuf;
 
 use clap::Parser;
 use eframe::egui;
+use epsm_viewer::overlay::OverlaySettings;
 use epsm_viewer::recent::Recent;
 use epsm_viewer::{Options, ViewerApp};
 
@@ -22,6 +24,10 @@ struct Args {
     /// the window to this PNG file and quit.
     #[arg(long)]
     screenshot: Option<PathBuf>,
+    /// Overlay layers shown at start, comma-separated: arrows, flow, heat,
+    /// matching (default: arrows).
+    #[arg(long, value_delimiter = ',', default_value = "arrows")]
+    overlay: Vec<String>,
     /// Window size in points, `WIDTHxHEIGHT`.
     #[arg(long, default_value = "1400x860", value_parser = parse_size)]
     size: [f32; 2],
@@ -42,6 +48,9 @@ fn main() -> anyhow::Result<()> {
         autorun: args.autorun,
         screenshot: args.screenshot,
         recent_file: Recent::default_store(),
+        overlay: OverlaySettings::default()
+            .with_layers(&args.overlay)
+            .map_err(|e| anyhow::anyhow!("--overlay: {e}"))?,
     };
     let native = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default()

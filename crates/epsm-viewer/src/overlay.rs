@@ -39,6 +39,38 @@ impl Default for OverlaySettings {
     }
 }
 
+impl OverlaySettings {
+    /// The layer names [`Self::with_layers`] accepts.
+    pub const LAYERS: [&str; 4] = ["arrows", "flow", "heat", "matching"];
+
+    /// These settings with exactly the named layers on (`arrows`, `flow`,
+    /// `heat`, `matching`); an unknown name is an error naming it.
+    pub fn with_layers(self, names: &[String]) -> Result<Self, String> {
+        let mut s = Self {
+            arrows: false,
+            flow: false,
+            heat: false,
+            matching: false,
+            ..self
+        };
+        for n in names {
+            match n.as_str() {
+                "arrows" => s.arrows = true,
+                "flow" => s.flow = true,
+                "heat" => s.heat = true,
+                "matching" => s.matching = true,
+                other => {
+                    return Err(format!(
+                        "unknown overlay layer `{other}` (expected one of {})",
+                        Self::LAYERS.join(", ")
+                    ));
+                }
+            }
+        }
+        Ok(s)
+    }
+}
+
 /// What one frame of the overlay drew (shown in the UI and checked by tests).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Drawn {
@@ -104,5 +136,23 @@ pub fn paint(
     Drawn {
         arrows: arrows.len(),
         lines: lines.len(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn layers_are_chosen_by_name() {
+        let names = ["flow".to_owned(), "matching".to_owned()];
+        let s = OverlaySettings::default()
+            .with_layers(&names)
+            .expect("known layers");
+        assert!(s.flow && s.matching && !s.arrows && !s.heat);
+        let err = OverlaySettings::default()
+            .with_layers(&["arows".to_owned()])
+            .expect_err("typo");
+        assert!(err.contains("arows") && err.contains("arrows"), "{err}");
     }
 }

@@ -206,6 +206,21 @@ fn choosing_a_parameter_changes_the_overlay() {
     });
     let arrows = arrows_for(&h, "box.translate.x").expect("overlay shown");
     assert!(arrows > 0, "the box's edges move with its x");
+    // Hovering the render inspects the pixel under the pointer.
+    let caption = h
+        .get_all_by_label_contains("Render (")
+        .next()
+        .expect("render caption")
+        .rect();
+    h.hover_at(eframe::egui::pos2(
+        caption.center().x,
+        caption.max.y + 120.0,
+    ));
+    wait_for(&mut h, "the pixel inspection tooltip", |h| {
+        has_label(h, "dp/dθ (")
+    });
+    assert!(has_label(&h, "paths: "), "path kinds are listed");
+    h.remove_cursor();
     // Denser arrows: spacing 4 → 2 draws more of them.
     h.state_mut().overlay.arrow_spacing = 2;
     h.step();
