@@ -3,7 +3,7 @@
 # (no GPU, no display: Mesa's software OpenGL through the glow renderer) and
 # saves it as docs/img/viewer.png (or OUT). Usage:
 #   scripts/viewer-screenshot.sh [PROBLEM] [ITERATIONS] [OUT]
-# e.g. scripts/viewer-screenshot.sh scenes/problems/mirror.toml 8 docs/img/viewer.png
+# e.g. scripts/viewer-screenshot.sh scenes/problems/layout.toml 6 docs/img/viewer.png
 # The viewer runs ITERATIONS iterations (`--autorun`), waits for the render
 # to refine and the overlay to arrive, saves the window (`--screenshot`) and
 # quits. EPSM_VIEWER=path/to/epsm-viewer uses that binary instead of a
@@ -12,8 +12,8 @@
 #   libxkbcommon-x11-0, libxcursor1, libxrandr2, libxi6 (loaded by winit).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-problem=${1:-scenes/problems/mirror.toml}
-iterations=${2:-8}
+problem=${1:-scenes/problems/layout.toml}
+iterations=${2:-6}
 out=${3:-docs/img/viewer.png}
 packages=(xvfb libgl1-mesa-dri libegl1 libxkbcommon-x11-0 libxcursor1 libxrandr2 libxi6)
 if ! command -v Xvfb > /dev/null || ! dpkg -s "${packages[@]}" > /dev/null 2>&1; then

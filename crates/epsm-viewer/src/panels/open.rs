@@ -58,8 +58,10 @@ pub fn show(ui: &mut egui::Ui, app: &mut ViewerApp) {
     }
     if !app.recent.files.is_empty() {
         ui.label("Recent:");
+        let cwd = std::env::current_dir().unwrap_or_default();
         for f in app.recent.files.clone() {
-            if ui.link(f.display().to_string()).clicked() {
+            let shown = f.strip_prefix(&cwd).unwrap_or(&f).display().to_string();
+            if ui.link(shown).clicked() {
                 chosen = Some(f);
             }
         }
