@@ -1,9 +1,11 @@
 //! Headless UI tests (egui_kittest: the accessibility tree, no GPU, no
 //! display). The viewer opens a tiny problem (a box on a floor at 32²,
-//! written to a temporary folder) through its Open button, steps it, switches
-//! the overlay's parameter, and shows the errors of malformed problem files
-//! from the shared corpus. The worker runs for real, so each check polls
-//! frames until the expected label appears (bounded; no timing is asserted).
+//! written to a temporary folder) through its Open button, steps it,
+//! switches the overlay's parameter, shows the errors of malformed problem
+//! files from the shared corpus, and moves the scene from a parameter's
+//! value box (the render restarts and refines while idle). The worker runs
+//! for real, so each check polls frames until the expected state appears
+//! (bounded; no timing is asserted).
 
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -11,6 +13,7 @@ use std::time::Duration;
 use eframe::egui::Role;
 use egui_kittest::Harness;
 use egui_kittest::kittest::{NodeT, Queryable};
+use epsm_viewer::worker::MAX_SPP;
 use epsm_viewer::{Options, ViewerApp};
 
 /// A grey box on a floor under an area light, seen from above at 32²; the
@@ -250,4 +253,51 @@ fn a_malformed_problem_shows_its_error_in_the_window() {
     );
     assert!(h.state().model.problem.is_none());
     assert!(h.state().worker.as_ref().is_some_and(|w| w.is_alive()));
+}
+
+fn render_spp(h: &Harness<'static, ViewerApp>) -> u32 {
+    let p = h.state().model.problem.as_ref();
+    p.and_then(|p| p.render.as_ref()).map_or(0, |(_, spp)| *spp)
+}
+
+#[test]
+fn the_render_refines_while_idle_and_a_slider_moves_the_scene() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut h = harness();
+    open(&mut h, &tiny_problem(dir.path()));
+    // At the full sample count the worker renders no more at this θ, so
+    // any later render is of the moved scene.
+    wait_for(&mut h, "the render to refine", |h| render_spp(h) >= MAX_SPP);
+    let before = h
+        .state()
+        .model
+        .problem
+        .as_ref()
+        .and_then(|p| p.render.as_ref());
+    let before = before.map(|(r, _)| r.image.clone()).expect("a render");
+    // The value box on the translation's row (beside its slider).
+    let row = h
+        .get_by_role_and_label(Role::RadioButton, "box.translate.x")
+        .rect();
+    let value_box = h
+        .get_all_by_role(Role::SpinButton)
+        .find(|b| (b.rect().center().y - row.center().y).abs() < 8.0)
+        .expect("a value box on the parameter's row");
+    value_box.set_value_accesskit(-0.5);
+    wait_for(&mut h, "the worker to take the new θ", |h| {
+        let p = h.state().model.problem.as_ref();
+        p.is_some_and(|p| (p.theta[1] + 0.5).abs() < 1e-9)
+    });
+    wait_for(&mut h, "the moved scene to render", |h| {
+        let p = h.state().model.problem.as_ref();
+        let r = p.and_then(|p| p.render.as_ref());
+        r.is_some_and(|(r, _)| r.image != before)
+    });
+    wait_for(&mut h, "the moved scene to refine", |h| {
+        render_spp(h) >= MAX_SPP
+    });
+    assert_eq!(
+        h.state().model.problem.as_ref().expect("loaded").theta[0],
+        0.5
+    );
 }
