@@ -8,14 +8,15 @@
 # to refine and the overlay to arrive, saves the window (`--screenshot`) and
 # quits. EPSM_VIEWER=path/to/epsm-viewer uses that binary instead of a
 # release build. On Debian, as root, it installs what it needs first:
-#   xvfb (the X server), libgl1-mesa-dri + libegl1 (software OpenGL),
-#   libxkbcommon-x11-0, libxcursor1, libxrandr2, libxi6 (loaded by winit).
+#   xvfb (the X server), libgl1 + libgl1-mesa-dri (software OpenGL through
+#   GLX), libx11-6, libx11-xcb1, libxcursor1, libxi6, libxkbcommon-x11-0
+#   (loaded at run time by winit/glutin; checked with LD_DEBUG=files).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 problem=${1:-scenes/problems/layout.toml}
 iterations=${2:-6}
 out=${3:-docs/img/viewer.png}
-packages=(xvfb libgl1-mesa-dri libegl1 libxkbcommon-x11-0 libxcursor1 libxrandr2 libxi6)
+packages=(xvfb libgl1 libgl1-mesa-dri libx11-6 libx11-xcb1 libxcursor1 libxi6 libxkbcommon-x11-0)
 if ! command -v Xvfb > /dev/null || ! dpkg -s "${packages[@]}" > /dev/null 2>&1; then
   if [ "$(id -u)" -ne 0 ]; then
     echo "needs: ${packages[*]} (run as root to install them)" >&2
