@@ -14,7 +14,7 @@ use crate::panels;
 use crate::recent::Recent;
 use crate::screenshot::Screenshot;
 use crate::state::Model;
-use crate::worker::{Command, Worker};
+use crate::worker::{Command, RunSettings, Worker};
 
 /// How the viewer starts.
 #[derive(Clone, Debug, Default)]
@@ -40,6 +40,8 @@ pub struct Controls {
     pub method: epsm_core::Method,
     /// The learning-rate factor chosen in the controls.
     pub lr_scale: f64,
+    /// The settings last sent to the worker.
+    pub applied: RunSettings,
     /// The parameter whose overlay is shown.
     pub overlay_param: Option<usize>,
 }
@@ -80,6 +82,10 @@ impl ViewerApp {
                 path_text: String::new(),
                 method: epsm_core::Method::Epsm,
                 lr_scale: 1.0,
+                applied: RunSettings {
+                    method: epsm_core::Method::Epsm,
+                    lr_scale: 1.0,
+                },
                 overlay_param: None,
             },
             overlay: options.overlay,
@@ -147,6 +153,7 @@ impl ViewerApp {
         };
         self.controls.method = p.settings.method;
         self.controls.lr_scale = p.settings.lr_scale;
+        self.controls.applied = p.settings;
         let n = p.params.len();
         let param = self
             .controls

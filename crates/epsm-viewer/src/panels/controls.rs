@@ -38,10 +38,10 @@ pub fn show(ui: &mut egui::Ui, app: &mut ViewerApp) {
             command = Some(Command::Run(Some(1)));
         }
         if ui.button("Reset").clicked() {
+            app.controls.applied = settings(app);
             command = Some(Command::Reset(settings(app)));
         }
     });
-    let before = settings(app);
     egui::ComboBox::from_label("method")
         .selected_text(app.controls.method.name())
         .show_ui(ui, |ui| {
@@ -49,14 +49,16 @@ pub fn show(ui: &mut egui::Ui, app: &mut ViewerApp) {
                 ui.selectable_value(&mut app.controls.method, m, m.name());
             }
         });
-    ui.add(
+    let lr = ui.add(
         egui::Slider::new(&mut app.controls.lr_scale, 0.05..=20.0)
             .logarithmic(true)
             .text("learning rate ×"),
     );
-    let after = settings(app);
-    if command.is_none() && after != before {
-        command = Some(Command::Configure(after));
+    // Applied when the slider is let go (each change restarts Adam).
+    let chosen = settings(app);
+    if command.is_none() && chosen != app.controls.applied && !lr.dragged() {
+        app.controls.applied = chosen;
+        command = Some(Command::Configure(chosen));
     }
     if let Some(c) = command {
         app.send(c);

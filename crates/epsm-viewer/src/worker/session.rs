@@ -8,6 +8,7 @@ use std::time::Instant;
 
 use epsm_core::field::{image_derivative, motion_field};
 use epsm_core::inspect::{fd_step, matching_lines, path_kind_counts};
+use epsm_core::problem::Target;
 use epsm_core::{OptResult, Optimization, Problem, load_problem};
 use epsm_render::Image;
 use epsm_render::tracer::{RenderOptions, render};
@@ -51,12 +52,14 @@ pub struct Session {
 impl Session {
     /// Loads the problem at `path` and sets it up with its own settings.
     pub fn load(path: &Path) -> OptResult<Self> {
-        let base = load_problem(path)?;
+        let mut base = load_problem(path)?;
         let settings = RunSettings {
             method: base.optimizer.method,
             lr_scale: 1.0,
         };
         let opt = Optimization::new(configured(&base, settings))?;
+        // Keep the rendered target: reset and configure then skip its render.
+        base.target = Target::Image(opt.target().clone());
         Ok(Self {
             path: path.to_owned(),
             base,
