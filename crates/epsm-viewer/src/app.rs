@@ -120,10 +120,10 @@ impl ViewerApp {
         }
     }
 
-    /// Opens the problem file at `path` (on the worker).
+    /// Opens the problem file at `path` (on the worker; it joins the recent
+    /// files once loaded).
     pub fn open(&mut self, path: PathBuf) {
         self.controls.path_text = path.display().to_string();
-        self.recent.add(&path);
         self.send(Command::Load(path));
     }
 
@@ -151,6 +151,7 @@ impl ViewerApp {
         let Some(p) = &self.model.problem else {
             return;
         };
+        self.recent.add(&p.path);
         self.controls.method = p.settings.method;
         self.controls.lr_scale = p.settings.lr_scale;
         self.controls.applied = p.settings;
