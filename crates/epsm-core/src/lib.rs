@@ -86,6 +86,7 @@ pub mod drops;
 pub mod error;
 pub mod field;
 pub mod frame;
+pub mod inspect;
 pub mod loss;
 pub mod motion;
 pub mod newton;

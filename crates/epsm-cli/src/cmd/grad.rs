@@ -10,12 +10,15 @@
 use std::path::PathBuf;
 
 use anyhow::Context;
-use epsm_core::backprop::luminance;
 use epsm_core::field::{image_derivative, motion_field};
+use epsm_core::inspect::{
+    Segment, fd_step, flow_colour, matching_lines, motion_arrows, normalized_luminance,
+    signed_colour,
+};
 use epsm_core::load_problem;
 use epsm_render::Image;
 use epsm_render::image_io::linear_to_srgb;
-use glam::{DVec2, Vec2};
+
 use plotters::prelude::*;
 
 use super::plots::write_png;
@@ -61,11 +64,11 @@ impl Canvas {
         Self { w, h, scale, rgb }
     }
 
-    fn lines(&mut self, lines: &[(Vec2, Vec2)], colour: RGBColor) -> anyhow::Result<()> {
+    fn lines(&mut self, lines: &[Segment], colour: RGBColor) -> anyhow::Result<()> {
         let (w, h, scale) = (self.w, self.h, self.scale as f32);
-        let px = |p: Vec2| ((p.x * scale) as i32, (p.y * scale) as i32);
+        let px = |p: glam::Vec2| ((p.x * scale) as i32, (p.y * scale) as i32);
         let root = BitMapBackend::with_buffer(&mut self.rgb, (w, h)).into_drawing_area();
-        for (a, b) in lines {
+        for Segment { from: a, to: b } in lines {
             let e = |e: DrawingAreaErrorKind<_>| anyhow::anyhow!("drawing: {e}");
             root.draw(&PathElement::new(
                 vec![px(*a), px(*b)],
@@ -86,25 +89,6 @@ fn srgb(img: &Image, x: u32, y: u32) -> [f32; 3] {
         linear_to_srgb(c.y),
         linear_to_srgb(c.z),
     ]
-}
-
-/// Hue from the angle, value from the magnitude relative to `max`.
-fn flow_colour(d: DVec2, max: f64) -> [f32; 3] {
-    if max <= 0.0 || d == DVec2::ZERO {
-        return [0.0; 3];
-    }
-    let hue = (d.y.atan2(d.x) / std::f64::consts::TAU).rem_euclid(1.0) as f32 * 6.0;
-    let v = (d.length() / max).sqrt() as f32;
-    let f = hue.fract();
-    let (a, b) = (v * (1.0 - f), v * f);
-    match hue as u32 {
-        0 => [v, b, 0.0],
-        1 => [a, v, 0.0],
-        2 => [0.0, v, b],
-        3 => [0.0, a, v],
-        4 => [b, 0.0, v],
-        _ => [v, 0.0, a],
-    }
 }
 
 /// Runs `epsm grad`.
@@ -137,50 +121,19 @@ pub fn run(args: &GradArgs) -> anyhow::Result<()> {
         let blend = if f == [0.0; 3] { 0.0 } else { 0.7 };
         std::array::from_fn(|k| c[k] * (1.0 - blend) + f[k] * blend)
     });
-    let step = (w.max(h) / 16).max(1);
-    let arrows: Vec<(Vec2, Vec2)> = (0..h)
-        .step_by(step as usize)
-        .flat_map(|y| (0..w).step_by(step as usize).map(move |x| (x, y)))
-        .filter_map(|(x, y)| {
-            let d = field[(y * w + x) as usize];
-            let start = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
-            (d != DVec2::ZERO).then(|| (start, start + (d / max * f64::from(step)).as_vec2()))
-        })
-        .collect();
+    let arrows = motion_arrows(&field, w, h, (w.max(h) / 16).max(1));
     flow.lines(&arrows, WHITE)?;
     write_png(&args.out.join("flow.png"), flow.w, flow.h, &flow.rgb)?;
 
-    let h_step = 1e-2 * problem_scale(&opt, param);
+    let h_step = fd_step(&opt, param);
     let (scene, table) = opt.match_view_mut();
     let di = image_derivative(scene, table, param, h_step, args.spp);
-    let lum: Vec<f32> = di.pixels.iter().map(|c| luminance(*c)).collect();
-    let peak = lum.iter().fold(0.0f32, |m, v| m.max(v.abs())).max(1e-12);
-    let heat = Canvas::new(w, h, |x, y| {
-        let v = lum[(y * w + x) as usize] / peak;
-        if v >= 0.0 {
-            [1.0, 1.0 - v, 1.0 - v]
-        } else {
-            [1.0 + v, 1.0 + v, 1.0]
-        }
-    });
+    let lum = normalized_luminance(&di.pixels);
+    let heat = Canvas::new(w, h, |x, y| signed_colour(lum[(y * w + x) as usize]));
     write_png(&args.out.join("dI.png"), heat.w, heat.h, &heat.rgb)?;
 
     let mut matching = Canvas::new(w, h, |x, y| srgb(img, x, y));
-    if let Some(m) = &g.loss.matched {
-        let lines: Vec<(Vec2, Vec2)> = m
-            .iter()
-            .enumerate()
-            .filter(|(i, _)| i % 7 == 0)
-            .map(|(i, t)| {
-                (
-                    Vec2::new((i as u32 % w) as f32 + 0.5, (i as u32 / w) as f32 + 0.5),
-                    *t,
-                )
-            })
-            .filter(|(a, b)| a.distance(*b) > 0.5)
-            .collect();
-        matching.lines(&lines, RGBColor(255, 220, 0))?;
-    }
+    matching.lines(&matching_lines(&g.loss, 7, 0.5), RGBColor(255, 220, 0))?;
     write_png(
         &args.out.join("matching.png"),
         matching.w,
@@ -201,12 +154,4 @@ pub fn run(args: &GradArgs) -> anyhow::Result<()> {
         args.out.display()
     );
     Ok(())
-}
-
-/// A finite-difference scale for parameter `param`: its distance to its
-/// true value, or 1.
-fn problem_scale(opt: &epsm_core::Optimization, param: usize) -> f64 {
-    let p = &opt.problem().params[param];
-    p.true_value
-        .map_or(1.0, |t| (opt.theta()[param] - t).abs().max(1e-3))
 }

@@ -1,0 +1,78 @@
+//! The recent-files list: the last few problem files opened, newest first,
+//! kept one path per line in a small text file (written atomically) when a
+//! location is given, else for the session only.
+
+use std::path::{Path, PathBuf};
+
+/// At most this many files are remembered.
+const KEEP: usize = 8;
+
+/// Recent problem files.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Recent {
+    /// Newest first.
+    pub files: Vec<PathBuf>,
+    store: Option<PathBuf>,
+}
+
+impl Recent {
+    /// The list kept at `store` (missing or unreadable: empty).
+    pub fn load(store: Option<PathBuf>) -> Self {
+        let files = store
+            .as_deref()
+            .and_then(|s| std::fs::read_to_string(s).ok())
+            .map(|t| {
+                t.lines()
+                    .filter(|l| !l.is_empty())
+                    .map(PathBuf::from)
+                    .collect()
+            })
+            .unwrap_or_default();
+        Self { files, store }
+    }
+
+    /// The default location: `$XDG_CONFIG_HOME/epsm-viewer/recent` or
+    /// `$HOME/.config/epsm-viewer/recent`.
+    pub fn default_store() -> Option<PathBuf> {
+        let base = std::env::var_os("XDG_CONFIG_HOME")
+            .map(PathBuf::from)
+            .or_else(|| std::env::var_os("HOME").map(|h| Path::new(&h).join(".config")))?;
+        Some(base.join("epsm-viewer").join("recent"))
+    }
+
+    /// Puts `path` first and saves the list (a failed save is ignored: the
+    /// list is a convenience).
+    pub fn add(&mut self, path: &Path) {
+        let path = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_owned());
+        self.files.retain(|f| *f != path);
+        self.files.insert(0, path);
+        self.files.truncate(KEEP);
+        if let Some(store) = &self.store {
+            let text: String = self
+                .files
+                .iter()
+                .map(|f| format!("{}\n", f.display()))
+                .collect();
+            let _ = epsm_core::report::write_atomic(store, text.as_bytes());
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn newest_first_without_duplicates_and_kept_across_loads() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let store = dir.path().join("sub").join("recent");
+        let mut r = Recent::load(Some(store.clone()));
+        assert!(r.files.is_empty());
+        r.add(Path::new("/nowhere/a.toml"));
+        r.add(Path::new("/nowhere/b.toml"));
+        r.add(Path::new("/nowhere/a.toml"));
+        let names: Vec<_> = r.files.iter().map(|f| f.display().to_string()).collect();
+        assert_eq!(names, ["/nowhere/a.toml", "/nowhere/b.toml"]);
+        assert_eq!(Recent::load(Some(store)).files, r.files);
+    }
+}
