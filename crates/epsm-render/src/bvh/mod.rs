@@ -2,7 +2,7 @@
 //!
 //! Static objects (all objects not made dynamic, except copies of a large
 //! shared mesh) are traced through one bottom-level BVH over their
-//! world-space triangles ([`world`]), with no top level and no transform.
+//! world-space triangles (module `world`), with no top level and no transform.
 //! Dynamic objects and instanced large meshes get one bottom-level BVH per
 //! distinct mesh (objects sharing an `Arc<Mesh>` share it), built in object
 //! space, behind a top-level BVH over their world boxes. A ray is traced into
