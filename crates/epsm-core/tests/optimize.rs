@@ -8,53 +8,10 @@ use std::path::Path;
 use epsm_core::problem::problem_from_str;
 use epsm_core::{Optimization, Problem};
 
-/// A grey box on a white floor under an area light, seen from above at 32².
+/// The shared tiny scene (`tests/data/tiny-box.toml` at the workspace root:
+/// a grey box on a floor under an area light, seen from above at 32²).
 const TINY: &str = r#"
-[scene.camera]
-origin = [0.0, 3.0, 2.0]
-target = [0.0, 0.0, 0.0]
-fov = 40.0
-resolution = [32, 32]
-
-[scene.render]
-max_depth = 3
-
-[scene.background]
-color = [0.1, 0.1, 0.1]
-
-[scene.materials.floor]
-type = "diffuse"
-albedo = [0.2, 0.2, 0.25]
-
-[scene.materials.box]
-type = "diffuse"
-albedo = [0.8, 0.6, 0.3]
-
-[scene.materials.lamp]
-type = "diffuse"
-albedo = [0.0, 0.0, 0.0]
-
-[[scene.objects]]
-name = "floor"
-shape = "rectangle"
-material = "floor"
-scale = 2.0
-rotate = [{ axis = [1, 0, 0], angle = -90 }]
-
-[[scene.objects]]
-name = "box"
-shape = "cube"
-material = "box"
-scale = 0.25
-translate = [0.0, 0.25, 0.0]
-
-[[scene.objects]]
-name = "lamp"
-shape = "rectangle"
-material = "lamp"
-emission = [6.0, 6.0, 6.0]
-rotate = [{ axis = [1, 0, 0], angle = 90 }]
-translate = [0.0, 3.0, 0.5]
+scene_file = "../../tests/data/tiny-box.toml"
 
 [target]
 spp = 16

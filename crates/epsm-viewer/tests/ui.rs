@@ -16,55 +16,11 @@ use egui_kittest::kittest::{NodeT, Queryable};
 use epsm_viewer::worker::MAX_SPP;
 use epsm_viewer::{Options, ViewerApp};
 
-/// A grey box on a floor under an area light, seen from above at 32²; the
-/// first parameter is a colour (no motion), the second a translation.
+/// The tiny problem's settings over the shared tiny scene
+/// (`tests/data/tiny-box.toml` at the workspace root: a grey box on a floor
+/// under an area light, seen from above at 32²); the first parameter is a
+/// colour (no motion), the second a translation.
 const TINY: &str = r#"
-[scene.camera]
-origin = [0.0, 3.0, 2.0]
-target = [0.0, 0.0, 0.0]
-fov = 40.0
-resolution = [32, 32]
-
-[scene.render]
-max_depth = 3
-
-[scene.background]
-color = [0.1, 0.1, 0.1]
-
-[scene.materials.floor]
-type = "diffuse"
-albedo = [0.2, 0.2, 0.25]
-
-[scene.materials.box]
-type = "diffuse"
-albedo = [0.8, 0.6, 0.3]
-
-[scene.materials.lamp]
-type = "diffuse"
-albedo = [0.0, 0.0, 0.0]
-
-[[scene.objects]]
-name = "floor"
-shape = "rectangle"
-material = "floor"
-scale = 2.0
-rotate = [{ axis = [1, 0, 0], angle = -90 }]
-
-[[scene.objects]]
-name = "box"
-shape = "cube"
-material = "box"
-scale = 0.25
-translate = [0.0, 0.25, 0.0]
-
-[[scene.objects]]
-name = "lamp"
-shape = "rectangle"
-material = "lamp"
-emission = [6.0, 6.0, 6.0]
-rotate = [{ axis = [1, 0, 0], angle = 90 }]
-translate = [0.0, 3.0, 0.5]
-
 [[parameters]]
 key = "floor.albedo.r"
 initial = 0.5
@@ -136,7 +92,9 @@ fn open(h: &mut Harness<'static, ViewerApp>, path: &Path) {
 
 fn tiny_problem(dir: &Path) -> PathBuf {
     let path = dir.join("tiny.toml");
-    std::fs::write(&path, TINY).expect("write the tiny problem");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/tiny-box.toml");
+    let text = format!("scene_file = {:?}\n{TINY}", scene.display().to_string());
+    std::fs::write(&path, text).expect("write the tiny problem");
     path
 }
 
