@@ -186,6 +186,18 @@ impl ParamTable {
         }
     }
 
+    /// The objects some parameter moves (translation, rotation or scale):
+    /// the ones [`ParamTable::apply`] sets a transform on.
+    pub fn moving_objects(&self) -> Vec<ObjectId> {
+        self.motion(&self.values())
+            .objects
+            .iter()
+            .enumerate()
+            .filter(|(_, om)| !om.grads.is_empty())
+            .map(|(id, _)| id as ObjectId)
+            .collect()
+    }
+
     /// Writes the current values into `scene` (transforms, point lights,
     /// camera, materials, emission). `scene` must be the scene the table was
     /// made from.

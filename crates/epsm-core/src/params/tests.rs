@@ -114,3 +114,18 @@ fn apply_writes_transforms_lights_camera_and_colours_into_the_scene() {
             .abs_diff_eq(pivot + DVec3::X * 0.25, 1e-12)
     );
 }
+
+#[test]
+fn moving_objects_are_those_with_geometric_parameters() {
+    let s = scene();
+    let mut t = ParamTable::new(&s);
+    t.add("box.albedo.g").expect("colour key");
+    t.add("lamp.translate.y").expect("point light key");
+    t.add("camera.yaw").expect("camera key");
+    assert!(
+        t.moving_objects().is_empty(),
+        "colours, lights and the camera move no object"
+    );
+    t.add("box.rotate.y").expect("rotation key");
+    assert_eq!(t.moving_objects(), vec![0]);
+}

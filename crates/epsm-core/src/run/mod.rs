@@ -60,11 +60,14 @@ impl View {
         let mut parts = problem.scene.clone();
         parts.camera.width = width;
         parts.camera.height = height;
-        let scene = Scene::new(parts)?;
+        let mut scene = Scene::new(parts)?;
         let mut table = ParamTable::new(&scene);
         for p in &problem.params {
             table.add(&p.key)?;
         }
+        // Driven objects get their own BVH instances now, so moving them
+        // rebuilds only the top level (not the static objects' BVH).
+        scene.set_dynamic(&table.moving_objects());
         Ok(Self { scene, table })
     }
 
