@@ -26,8 +26,10 @@ done
   echo "Parameter error: RMS of θ − θ_true in the parameters' units (scene units, degrees, albedo);"
   echo "image RMSE: linear RGB against the target at the scene resolution."
   echo
-  echo "| problem | method | parameter error | image RMSE | iterations | wall s |"
-  echo "|---|---|---|---|---|---|"
+  echo "Seconds per iteration (mean): primal render, gradient-pass trace, matching, solves."
+  echo
+  echo "| problem | method | parameter error | image RMSE | iterations | wall s | primal s/it | trace s/it | matching s/it | solves s/it |"
+  echo "|---|---|---|---|---|---|---|---|---|---|"
   cat "$rows"
 } > docs/results.md.tmp
 mv docs/results.md.tmp docs/results.md

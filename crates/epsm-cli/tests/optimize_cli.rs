@@ -116,7 +116,11 @@ fn compare_under_a_time_budget_stops_every_method_at_the_budget() {
     let rows: Vec<&str> = table.lines().skip(1).collect();
     assert_eq!(rows.len(), 2);
     for row in rows {
-        assert_eq!(row.split(',').nth(4), Some("1"), "iterations column: {row}");
+        let cols: Vec<&str> = row.split(',').collect();
+        assert_eq!(cols.len(), 10, "{row}");
+        assert_eq!(cols[4], "1", "iterations column: {row}");
+        let primal: f64 = cols[6].parse().expect("primal_s");
+        assert!(primal > 0.0, "primal seconds per iteration: {row}");
     }
     assert!(dir.join("compare.png").is_file());
 

@@ -132,6 +132,18 @@ pub fn param_error(theta: &[f64], truth: &[Option<f64>]) -> Option<f64> {
     (!theta.is_empty()).then(|| (sum / theta.len() as f64).sqrt())
 }
 
+/// Mean seconds per iteration of each part over `rows` (zero for no rows).
+pub fn mean_timings(rows: &[Row]) -> Timings {
+    let n = rows.len().max(1) as f64;
+    let sum = |f: fn(&Timings) -> f64| rows.iter().map(|r| f(&r.timings)).sum::<f64>() / n;
+    Timings {
+        primal: sum(|t| t.primal),
+        trace: sum(|t| t.trace),
+        matching: sum(|t| t.matching),
+        solve: sum(|t| t.solve),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -163,5 +175,37 @@ mod tests {
             .expect("number");
         assert!((err - 0.5f64.sqrt()).abs() < 1e-12);
         assert_eq!(param_error(&[1.0], &[None]), None);
+    }
+
+    #[test]
+    fn mean_timings_average_each_part() {
+        let row = |primal, solve| Row {
+            iteration: 0,
+            wall_s: 0.0,
+            loss: 0.0,
+            image_rmse: 0.0,
+            param_error: None,
+            theta: Vec::new(),
+            paths: [0; 3],
+            dropped: Vec::new(),
+            kinds: String::new(),
+            timings: Timings {
+                primal,
+                trace: 1.0,
+                matching: 2.0,
+                solve,
+            },
+        };
+        let m = mean_timings(&[row(1.0, 0.0), row(3.0, 4.0)]);
+        assert_eq!(
+            m,
+            Timings {
+                primal: 2.0,
+                trace: 1.0,
+                matching: 2.0,
+                solve: 2.0
+            }
+        );
+        assert_eq!(mean_timings(&[]), Timings::default());
     }
 }

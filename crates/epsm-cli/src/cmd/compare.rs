@@ -62,20 +62,30 @@ pub fn run(args: &CompareArgs) -> anyhow::Result<()> {
         let s = optimize(p, &out.join(method), false, args.time_budget)?;
         runs.push((method.clone(), s));
     }
-    let mut csv = String::from("problem,method,param_error,image_rmse,iterations,wall_s\n");
+    let mut csv = String::from(
+        "problem,method,param_error,image_rmse,iterations,wall_s,primal_s,trace_s,matching_s,solve_s\n",
+    );
     let mut md = String::new();
     for (m, s) in &runs {
         let pe = s.param_error.map(|e| format!("{e:.5}")).unwrap_or_default();
+        let t = &s.per_iteration;
+        let parts = [t.primal, t.trace, t.matching, t.solve];
         let _ = writeln!(
             csv,
-            "{name},{m},{pe},{:.5},{},{:.1}",
-            s.image_rmse, s.iterations, s.wall_s
+            "{name},{m},{pe},{:.5},{},{:.1},{}",
+            s.image_rmse,
+            s.iterations,
+            s.wall_s,
+            parts.map(|x| format!("{x:.3}")).join(",")
         );
         let pe = if pe.is_empty() { "n/a".into() } else { pe };
         let _ = writeln!(
             md,
-            "| {name} | {m} | {pe} | {:.5} | {} | {:.1} |",
-            s.image_rmse, s.iterations, s.wall_s
+            "| {name} | {m} | {pe} | {:.5} | {} | {:.1} | {} |",
+            s.image_rmse,
+            s.iterations,
+            s.wall_s,
+            parts.map(|x| format!("{x:.3}")).join(" | ")
         );
     }
     write_atomic(&out.join("compare.csv"), csv.as_bytes())?;

@@ -9,7 +9,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
-use epsm_core::report::{csv, param_error, write_atomic};
+use epsm_core::report::{Timings, csv, mean_timings, param_error, write_atomic};
 use epsm_core::{Method, Optimization, Problem, load_problem};
 use epsm_render::Image;
 use epsm_render::image_io::write_image;
@@ -53,6 +53,9 @@ pub struct Summary {
     pub iterations: u32,
     /// Wall seconds of the optimization.
     pub wall_s: f64,
+    /// Mean seconds per iteration of the primal render, the gradient-pass
+    /// trace, the matching and the solves.
+    pub per_iteration: Timings,
     /// One point per iteration.
     pub curve: Vec<CurvePoint>,
 }
@@ -184,6 +187,7 @@ pub fn optimize(
         image_rmse: epsm_core::loss::rmse(&final_image, opt.target()),
         iterations: opt.iteration(),
         wall_s: opt.checkpoint().wall_s,
+        per_iteration: mean_timings(opt.rows()),
         curve,
     };
     let method = opt.problem().optimizer.method.name();
