@@ -19,6 +19,9 @@ mod path;
 
 use path::{Recording, trace_path};
 
+#[cfg(target_arch = "x86_64")]
+use crate::bvh::Avx;
+use crate::bvh::{BoxTest, Portable};
 use crate::film::Image;
 use crate::record::{PathRecord, RecordLevel};
 use crate::sampler::PixelSampler;
@@ -145,6 +148,7 @@ pub fn trace_samples(
                 s.sample,
                 Some((level, &mut rec)),
                 &mut counters,
+                Portable,
             );
             rec
         })
@@ -200,7 +204,8 @@ struct TileOutput {
     counters: TraceCounters,
 }
 
-/// Renders one tile, with the AVX2 build of the tracer where the CPU has it.
+/// Renders one tile, with the AVX2 build of the tracer (and AVX box tests)
+/// where the CPU has it.
 #[allow(unsafe_code)]
 fn render_tile(
     scene: &Scene,
@@ -209,7 +214,8 @@ fn render_tile(
     tile: UVec2,
 ) -> TileOutput {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2")
+    if let Some(avx) = Avx::detect()
+        && std::arch::is_x86_feature_detected!("avx2")
         && std::arch::is_x86_feature_detected!("bmi1")
         && std::arch::is_x86_feature_detected!("bmi2")
         && std::arch::is_x86_feature_detected!("lzcnt")
@@ -218,9 +224,9 @@ fn render_tile(
         // SAFETY: `render_tile_avx2` only requires the CPU features it
         // enables, and the CPU was just found to have each of them (AVX2
         // implies the AVX and SSE levels below it).
-        return unsafe { render_tile_avx2(scene, opts, level, tile) };
+        return unsafe { render_tile_avx2(scene, opts, level, tile, avx) };
     }
-    render_tile_body(scene, opts, level, tile)
+    render_tile_body(scene, opts, level, tile, Portable)
 }
 
 /// [`render_tile_body`] compiled for AVX2 and the bit-manipulation
@@ -238,16 +244,19 @@ fn render_tile_avx2(
     opts: &RenderOptions,
     level: Option<RecordLevel>,
     tile: UVec2,
+    avx: Avx,
 ) -> TileOutput {
-    render_tile_body(scene, opts, level, tile)
+    render_tile_body(scene, opts, level, tile, avx)
 }
 
+/// Renders one tile, box tests by `boxes`.
 #[inline(always)]
 fn render_tile_body(
     scene: &Scene,
     opts: &RenderOptions,
     level: Option<RecordLevel>,
     tile: UVec2,
+    boxes: impl BoxTest,
 ) -> TileOutput {
     let (w, h) = (scene.camera().width, scene.camera().height);
     let mut out = TileOutput {
@@ -270,11 +279,14 @@ fn render_tile_body(
                             s,
                             Some((level, &mut rec)),
                             &mut out.counters,
+                            boxes,
                         );
                         out.records.push(rec);
                         l
                     }
-                    None => trace_pixel_sample(scene, opts, pixel, s, None, &mut out.counters),
+                    None => {
+                        trace_pixel_sample(scene, opts, pixel, s, None, &mut out.counters, boxes)
+                    }
                 };
                 sum += l;
             }
@@ -284,8 +296,8 @@ fn render_tile_body(
     out
 }
 
-/// Traces one pixel sample; returns its radiance (zero, and counted, when it
-/// was not finite).
+/// Traces one pixel sample (box tests by `boxes`); returns its radiance
+/// (zero, and counted, when it was not finite).
 #[inline(always)]
 fn trace_pixel_sample(
     scene: &Scene,
@@ -294,6 +306,7 @@ fn trace_pixel_sample(
     sample: u32,
     record: Option<(RecordLevel, &mut PathRecord)>,
     counters: &mut TraceCounters,
+    boxes: impl BoxTest,
 ) -> Vec3 {
     let cam = scene.camera();
     let mut sampler = PixelSampler::new(opts.seed, pixel.y * cam.width + pixel.x, sample, opts.spp);
@@ -312,7 +325,15 @@ fn trace_pixel_sample(
             done: false,
         }
     });
-    let l = trace_path(scene, opts, ray, &mut sampler, rec.as_mut(), counters);
+    let l = trace_path(
+        scene,
+        opts,
+        ray,
+        &mut sampler,
+        rec.as_mut(),
+        counters,
+        boxes,
+    );
     let l = if l.is_finite() {
         l
     } else {
