@@ -1,4 +1,5 @@
-//! Two-level BVH over the scene's objects (obvhs CWBVH at both levels).
+//! Two-level BVH over the scene's objects (obvhs CWBVH at both levels, walked
+//! by our own loop in module `walk`).
 //!
 //! Static objects (all objects not made dynamic, except copies of a large
 //! shared mesh) are traced through one bottom-level BVH over their
@@ -412,4 +413,79 @@ fn mesh_bounds(mesh: &Mesh) -> Aabb {
     (0..mesh.len() as u32)
         .filter_map(|tri| PackedTriangle::new(mesh.triangle(tri).map(Vec3A::from)))
         .fold(Aabb::empty(), |b, t| b.union(&t.aabb()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use epsm_testkit::Rng;
+    use glam::{DAffine3, DQuat};
+
+    /// A triangle soup of `count` triangles in `[-1, 1]³`.
+    fn soup(rng: &mut Rng, count: usize) -> Arc<Mesh> {
+        let mut mesh = Mesh::default();
+        for _ in 0..count {
+            let a = rng.dvec3(-1.0, 1.0).as_vec3();
+            let base = mesh.positions.len() as u32;
+            mesh.positions.extend([
+                a,
+                a + rng.dvec3(-0.4, 0.4).as_vec3(),
+                a + rng.dvec3(-0.4, 0.4).as_vec3(),
+            ]);
+            mesh.indices.push([base, base + 1, base + 2]);
+        }
+        Arc::new(mesh)
+    }
+
+    /// The AVX box tests (when the CPU has AVX) find exactly the hits of the
+    /// portable ones, through the static BVH and through instances.
+    #[test]
+    fn avx_and_portable_box_tests_agree() {
+        #[cfg(target_arch = "x86_64")]
+        let Some(avx) = Avx::detect() else {
+            return;
+        };
+        #[cfg(not(target_arch = "x86_64"))]
+        let avx = Portable;
+        let mut rng = Rng::new(17);
+        let (big, small) = (soup(&mut rng, 3000), soup(&mut rng, 50));
+        let objects: Vec<Object> = (0..6)
+            .map(|i| Object {
+                name: format!("o{i}"),
+                mesh: Arc::clone(if i % 2 == 0 { &big } else { &small }),
+                world_from_object: DAffine3::from_scale_rotation_translation(
+                    rng.dvec3(0.3, 2.0),
+                    DQuat::from_axis_angle(rng.unit(), rng.range(0.0, 6.0)),
+                    rng.dvec3(-2.0, 2.0),
+                ),
+                material: 0,
+                emission: None,
+            })
+            .collect();
+        let accel = Accel::build_with_dynamic(&objects, &[1, 4]);
+        let (mut hits, mut occluded) = (0, 0);
+        for i in 0..20_000 {
+            let origin = rng.dvec3(-4.0, 4.0).as_vec3();
+            let mut dir = rng.unit().as_vec3();
+            if i % 5 == 0 {
+                dir[rng.below(3)] = 0.0;
+            }
+            let mut ray = Ray::new(origin, dir * rng.range(0.5, 2.0) as f32);
+            if i % 3 == 0 {
+                ray.t_max = rng.range(0.0, 4.0) as f32;
+            }
+            let portable = accel.trace::<false>(&ray, Portable);
+            assert_eq!(
+                accel.trace::<false>(&ray, avx),
+                portable,
+                "ray {i}: {ray:?}"
+            );
+            let any = accel.trace::<true>(&ray, Portable).is_some();
+            assert_eq!(accel.trace::<true>(&ray, avx).is_some(), any);
+            assert_eq!(any, portable.is_some());
+            hits += usize::from(portable.is_some());
+            occluded += usize::from(any);
+        }
+        assert!(hits > 2000 && occluded == hits, "{hits} hits");
+    }
 }

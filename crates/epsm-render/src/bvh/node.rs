@@ -2,7 +2,7 @@
 //!
 //! Model: Ylitie, Karras and Laine, "Efficient Incoherent Ray Traversal on
 //! GPUs Through Compressed Wide BVHs" (HPG 2017), as built by obvhs and
-//! walked by obvhs's `traverse!` macro, with three changes:
+//! walked in obvhs's order by our own loop (module `walk`), with four changes:
 //! - child boxes are stored as exact `f32` planes ([`WideNode`]; 224 bytes
 //!   per node instead of 80): converting 48 quantised bytes to floats was a
 //!   third of the instructions per node, and exact boxes are tighter. Measured
@@ -16,7 +16,11 @@
 //!   by `±TINY_DIR` for the slab test only (obvhs uses `±f32::EPSILON`, which
 //!   can cull boxes the ray runs along a few ULPs inside), with the sign
 //!   matching the octant test `dir < 0`, so rays with zero components never
-//!   produce NaN.
+//!   produce NaN;
+//! - the eight child boxes are tested in one pass of 256-bit AVX operations
+//!   where the CPU has AVX ([`Avx`], detected at run time), else as two
+//!   halves of 128-bit operations ([`Portable`]); both do the same operations
+//!   in the same order, so they give the same masks.
 //!
 //! No parameters.
 
@@ -46,10 +50,8 @@ pub(crate) struct TraceRay {
     pub dir: Vec3A,
     /// Constants of the watertight triangle test.
     pub shear: RayShear,
-    /// Origin components, each splat over four lanes.
-    origin4: [Vec4; 3],
-    /// Reciprocals of the clamped direction components, splat.
-    inv_dir4: [Vec4; 3],
+    /// Reciprocals of the clamped direction components.
+    inv_dir: Vec3A,
     /// Per axis, the plane side (0 = min, 1 = max) the ray enters a box by.
     near: [usize; 3],
     /// Smallest accepted `t`.
@@ -74,13 +76,11 @@ impl TraceRay {
         let oct_inv4 = ((pos & 1) * 0x0404_0404)
             | (((pos >> 1) & 1) * 0x0202_0202)
             | ((pos >> 2) * 0x0101_0101);
-        let inv = safe.recip();
         Self {
             origin,
             dir,
             shear: RayShear::new(dir),
-            origin4: [0, 1, 2].map(|a| Vec4::splat(origin[a])),
-            inv_dir4: [0, 1, 2].map(|a| Vec4::splat(inv[a])),
+            inv_dir: safe.recip(),
             near,
             t_min,
             t_max,
@@ -92,7 +92,7 @@ impl TraceRay {
 /// A CWBVH node with its eight child boxes decompressed to `f32` planes
 /// (rounded outwards by one ULP), so the slab test converts no bytes; empty
 /// child slots get inverted boxes that no ray enters. Field names follow
-/// obvhs's `CwBvhNode` so obvhs's `traverse!` macro walks these nodes.
+/// obvhs's `CwBvhNode`.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct WideNode {
     /// `planes[axis][0 = min, 1 = max]`: one plane per child, in child order.
@@ -166,7 +166,8 @@ impl WideNode {
                 let near_side = ray.near[axis] & 1;
                 let near = lanes(&self.planes[axis][near_side]);
                 let far = lanes(&self.planes[axis][near_side ^ 1]);
-                let (o, inv) = (ray.origin4[axis], ray.inv_dir4[axis]);
+                let o = Vec4::splat(ray.origin[axis]);
+                let inv = Vec4::splat(ray.inv_dir[axis]);
                 ((near - o) * inv, (far - o) * inv)
             };
             let ((x0, x1), (y0, y1), (z0, z1)) = (slab(0), slab(1), slab(2));
@@ -197,8 +198,8 @@ impl WideNode {
             let near_side = ray.near[axis] & 1;
             let near = load(&self.planes[axis][near_side]);
             let far = load(&self.planes[axis][near_side ^ 1]);
-            let o = _mm256_set1_ps(ray.origin4[axis].x);
-            let inv = _mm256_set1_ps(ray.inv_dir4[axis].x);
+            let o = _mm256_set1_ps(ray.origin[axis]);
+            let inv = _mm256_set1_ps(ray.inv_dir[axis]);
             (
                 _mm256_mul_ps(_mm256_sub_ps(near, o), inv),
                 _mm256_mul_ps(_mm256_sub_ps(far, o), inv),
@@ -267,7 +268,7 @@ impl BoxTest for Avx {
     }
 }
 
-/// A CWBVH of [`WideNode`]s (the `nodes` field is what `traverse!` reads).
+/// A CWBVH of [`WideNode`]s.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct WideBvh {
     /// The nodes, root first.
