@@ -14,31 +14,81 @@
 //! film position and the first bounce, where stratification pays) use the
 //! permutation; later dimensions are independent hashed numbers, four times
 //! cheaper.
+//!
+//! Each number starts from a hash of `(seed, pixel, dimension)` that does not
+//! depend on the sample; [`PixelKeys`] computes those once per pixel for all
+//! its samples (the same numbers, one 64-bit hash fewer per number).
 
 use glam::Vec2;
 
-/// The random stream of one pixel sample.
-#[derive(Clone, Copy, Debug)]
-pub struct PixelSampler {
+/// The sample-independent hashes of one pixel's dimensions, computed once
+/// and shared by the pixel's samples.
+#[derive(Clone, Debug, Default)]
+pub struct PixelKeys {
     key: u64,
-    sample: u32,
-    spp: u32,
-    dim: u32,
+    dims: Vec<u64>,
 }
 
-impl PixelSampler {
-    /// The stream of sample `sample` (of `spp`) of pixel `pixel` (a linear
-    /// index, e.g. `y·width + x`) under `seed`.
+impl PixelKeys {
+    /// The hashes of dimensions `0..dims` of pixel `pixel` (a linear index,
+    /// e.g. `y·width + x`) under `seed`; later dimensions are hashed as they
+    /// are drawn.
+    pub fn new(seed: u32, pixel: u32, dims: u32) -> Self {
+        let mut keys = Self::default();
+        keys.set_pixel(seed, pixel, dims);
+        keys
+    }
+
+    /// [`PixelKeys::new`] in place, keeping the allocation.
     #[inline]
-    pub fn new(seed: u32, pixel: u32, sample: u32, spp: u32) -> Self {
-        Self {
-            key: mix64(((seed as u64) << 32) | pixel as u64),
+    pub fn set_pixel(&mut self, seed: u32, pixel: u32, dims: u32) {
+        let key = pixel_key(seed, pixel);
+        self.key = key;
+        self.dims.clear();
+        self.dims.extend((0..dims).map(|d| dim_hash(key, d)));
+    }
+
+    /// The stream of sample `sample` (of `spp`) of this pixel.
+    #[inline]
+    pub fn sampler(&self, sample: u32, spp: u32) -> PixelSampler<'_> {
+        PixelSampler {
+            key: self.key,
+            dims: &self.dims,
             sample,
             spp: spp.max(1),
             dim: 0,
         }
     }
+}
 
+/// The random stream of one pixel sample.
+#[derive(Clone, Copy, Debug)]
+pub struct PixelSampler<'a> {
+    key: u64,
+    /// Hashes of the first dimensions ([`PixelKeys`]), possibly none.
+    dims: &'a [u64],
+    sample: u32,
+    spp: u32,
+    dim: u32,
+}
+
+impl PixelSampler<'static> {
+    /// The stream of sample `sample` (of `spp`) of pixel `pixel` (a linear
+    /// index, e.g. `y·width + x`) under `seed`, hashing every dimension as
+    /// it is drawn.
+    #[inline]
+    pub fn new(seed: u32, pixel: u32, sample: u32, spp: u32) -> Self {
+        Self {
+            key: pixel_key(seed, pixel),
+            dims: &[],
+            sample,
+            spp: spp.max(1),
+            dim: 0,
+        }
+    }
+}
+
+impl PixelSampler<'_> {
     /// Jumps to dimension `dim` (paths give each bounce a fixed block of
     /// dimensions so that a path's numbers do not depend on earlier branches).
     #[inline]
@@ -49,7 +99,10 @@ impl PixelSampler {
     /// The next number in `[0, 1)`.
     #[inline]
     pub fn next_1d(&mut self) -> f32 {
-        let h = mix64(self.key ^ (self.dim as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
+        let h = match self.dims.get(self.dim as usize) {
+            Some(&h) => h,
+            None => dim_hash(self.key, self.dim),
+        };
         self.dim += 1;
         if self.dim > STRATIFIED_DIMENSIONS {
             return to_unit((mix64(h ^ self.sample as u64) >> 32) as u32);
@@ -76,6 +129,18 @@ const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
 #[inline]
 fn to_unit(bits: u32) -> f32 {
     (bits >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
+}
+
+/// The key of pixel `pixel` under `seed`.
+#[inline]
+fn pixel_key(seed: u32, pixel: u32) -> u64 {
+    mix64(((seed as u64) << 32) | pixel as u64)
+}
+
+/// The sample-independent hash of dimension `dim` of the pixel with `key`.
+#[inline]
+fn dim_hash(key: u64, dim: u32) -> u64 {
+    mix64(key ^ (dim as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15))
 }
 
 /// A 64-bit finaliser (Stafford's variant 13 of MurmurHash3's fmix64).
@@ -166,6 +231,27 @@ mod tests {
                 strata[(x * spp as f32) as usize] += 1;
             }
             assert!(strata.iter().all(|&c| c == 1), "dim {dim}: {strata:?}");
+        }
+    }
+
+    #[test]
+    fn cached_keys_give_the_same_streams() {
+        for spp in [1u32, 4, 37] {
+            for dims in [0u32, 3, 10, 66] {
+                let keys = PixelKeys::new(9, 4321, dims);
+                for s in 0..spp {
+                    let mut cached = keys.sampler(s, spp);
+                    let mut direct = PixelSampler::new(9, 4321, s, spp);
+                    for d in 0..80 {
+                        if d % 7 == 3 {
+                            cached.set_dimension(d);
+                            direct.set_dimension(d);
+                        }
+                        let (a, b) = (cached.next_1d(), direct.next_1d());
+                        assert_eq!(a.to_bits(), b.to_bits(), "spp {spp} dims {dims} dim {d}");
+                    }
+                }
+            }
         }
     }
 

@@ -21,15 +21,15 @@
 
 use std::time::Duration;
 
-use glam::{UVec2, Vec3A};
+use glam::Vec3A;
 use obvhs::BvhBuildParams;
 use obvhs::aabb::Aabb;
-use obvhs::cwbvh::Traversal;
 use obvhs::cwbvh::builder::build_cwbvh_from_tris;
 use obvhs::triangle::Triangle;
 
-use super::node::{TraceRay, WideBvh};
+use super::node::{BoxTest, TraceRay, WideBvh};
 use super::triangle::PackedTriangle;
+use super::walk::walk;
 use crate::scene::Mesh;
 
 /// The closest hit found so far in one bottom-level BVH.
@@ -120,36 +120,31 @@ impl Blas {
         self.bvh.bytes() + self.triangles.len() * size_of::<PackedTriangle>() + self.ids.len() * 4
     }
 
-    /// Traces the object-space `ray` with traversal state `state` (reused
-    /// between calls: building one clears a 256-byte stack). Without `ANY`,
+    /// Traces the object-space `ray`, box tests by `boxes`. Without `ANY`,
     /// lowers `ray.t_max` to each closer hit and records it in `best`; with
     /// `ANY`, stops at the first hit. Returns whether anything was hit.
     #[inline(always)]
     pub fn trace<const ANY: bool>(
         &self,
         ray: &mut TraceRay,
-        state: &mut Traversal,
+        boxes: impl BoxTest,
         best: &mut SlotHit,
     ) -> bool {
         let mut found = false;
-        state.reinit(ray.dir);
-        let mut node;
-        obvhs::traverse!(self.bvh, node, state, node.intersect(ray), {
-            let slot = state.primitive_id;
-            if let Some(hit) = self.triangles[slot as usize]
+        walk(&self.bvh, ray, boxes, |slot, ray| {
+            let Some(hit) = self.triangles[slot as usize]
                 .intersect(ray.origin, &ray.shear, ray.t_min, ray.t_max)
-            {
-                found = true;
-                if ANY {
-                    return true;
-                }
-                ray.t_max = hit.t;
-                *best = SlotHit {
-                    slot,
-                    b1: hit.b1,
-                    b2: hit.b2,
-                };
-            }
+            else {
+                return false;
+            };
+            found = true;
+            ray.t_max = hit.t;
+            *best = SlotHit {
+                slot,
+                b1: hit.b1,
+                b2: hit.b2,
+            };
+            ANY
         });
         found
     }

@@ -1,4 +1,5 @@
-//! Two-level BVH over the scene's objects (obvhs CWBVH at both levels).
+//! Two-level BVH over the scene's objects (obvhs CWBVH at both levels, walked
+//! by our own loop in module `walk`).
 //!
 //! Static objects (all objects not made dynamic, except copies of a large
 //! shared mesh) are traced through one bottom-level BVH over their
@@ -27,6 +28,7 @@ mod blas;
 mod node;
 mod tlas;
 mod triangle;
+mod walk;
 mod world;
 
 use std::collections::HashMap;
@@ -34,17 +36,20 @@ use std::fmt;
 use std::sync::Arc;
 use std::time::Instant;
 
-use glam::{DVec3, UVec2, Vec3A};
+use glam::{DVec3, Vec3A};
 use obvhs::aabb::Aabb;
-use obvhs::cwbvh::Traversal;
 
 use crate::hit::{self, Hit, SurfacePoint};
 use crate::ray::Ray;
 use crate::scene::{Mesh, Object, ObjectId};
 use blas::{Blas, SlotHit};
+#[cfg(target_arch = "x86_64")]
+pub(crate) use node::Avx;
 use node::TraceRay;
+pub(crate) use node::{BoxTest, Portable};
 use tlas::{Instance, Tlas, Traced};
 use triangle::PackedTriangle;
+use walk::walk;
 use world::WorldBlas;
 
 /// Marks an object without an instance.
@@ -255,21 +260,58 @@ impl Accel {
     /// The closest hit with `t` in `[ray.t_min, ray.t_max]`.
     #[inline(always)]
     pub fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
-        self.trace::<false>(ray)
+        self.trace_detected::<false>(ray)
     }
 
     /// Whether anything lies within `[ray.t_min, ray.t_max]` (stops at the
     /// first hit found).
     #[inline(always)]
     pub fn occluded(&self, ray: &Ray) -> bool {
-        self.trace::<true>(ray).is_some()
+        self.trace_detected::<true>(ray).is_some()
+    }
+
+    /// [`Accel::closest_hit`] with box tests by `boxes` (the tracer passes
+    /// the widest its CPU has once per tile).
+    #[inline(always)]
+    pub(crate) fn closest_hit_with(&self, ray: &Ray, boxes: impl BoxTest) -> Option<Hit> {
+        self.trace::<false>(ray, boxes)
+    }
+
+    /// [`Accel::occluded`] with box tests by `boxes`.
+    #[inline(always)]
+    pub(crate) fn occluded_with(&self, ray: &Ray, boxes: impl BoxTest) -> bool {
+        self.trace::<true>(ray, boxes).is_some()
+    }
+
+    /// [`Accel::trace`] with the widest box tests this CPU has.
+    #[inline(always)]
+    fn trace_detected<const ANY: bool>(&self, ray: &Ray) -> Option<Hit> {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(avx) = Avx::detect() {
+            return self.trace_avx::<ANY>(ray, avx);
+        }
+        self.trace::<ANY>(ray, Portable)
+    }
+
+    /// [`Accel::trace`] with AVX box tests, compiled with AVX enabled so
+    /// they inline (`avx` proves the CPU has it).
+    #[cfg(target_arch = "x86_64")]
+    #[allow(unsafe_code)]
+    fn trace_avx<const ANY: bool>(&self, ray: &Ray, avx: Avx) -> Option<Hit> {
+        #[target_feature(enable = "avx")]
+        fn with_avx<const ANY: bool>(accel: &Accel, ray: &Ray, avx: Avx) -> Option<Hit> {
+            accel.trace::<ANY>(ray, avx)
+        }
+        // SAFETY: `with_avx` requires only AVX, and an `Avx` token exists
+        // only on a CPU found to have it.
+        unsafe { with_avx::<ANY>(self, ray, avx) }
     }
 
     /// Traces `ray` through the static BVH and then the top level: the
     /// closest hit, or with `ANY` the first hit found (whose barycentrics are
     /// then meaningless).
     #[inline(always)]
-    fn trace<const ANY: bool>(&self, ray: &Ray) -> Option<Hit> {
+    fn trace<const ANY: bool>(&self, ray: &Ray, boxes: impl BoxTest) -> Option<Hit> {
         let mut world = TraceRay::new(
             Vec3A::from(ray.origin),
             Vec3A::from(ray.dir),
@@ -278,9 +320,8 @@ impl Accel {
         );
         let mut best = SlotHit::default();
         let mut found = Found::Nothing;
-        let mut state = Traversal::default();
         if let Some(statics) = self.world.as_deref()
-            && statics.blas.trace::<ANY>(&mut world, &mut state, &mut best)
+            && statics.blas.trace::<ANY>(&mut world, boxes, &mut best)
         {
             found = Found::World(statics);
             if ANY || self.tlas.slots.is_empty() {
@@ -290,29 +331,27 @@ impl Accel {
         if self.tlas.slots.is_empty() {
             return None;
         }
-        let mut blas_state = Traversal::default();
-        state.reinit(world.dir);
-        let mut node;
-        obvhs::traverse!(self.tlas.bvh, node, state, node.intersect(&world), {
-            let index = self.tlas.slots[state.primitive_id as usize];
+        walk(&self.tlas.bvh, &mut world, boxes, |slot, world| {
+            let index = self.tlas.slots[slot as usize];
             let instance = &self.instances[index as usize];
-            if let (Some(placement), Traced::Blas(blas)) = (&instance.placement, instance.traced) {
-                let to_object = &placement.object_from_world;
-                let mut local = TraceRay::new(
-                    to_object.transform_point3a(world.origin),
-                    to_object.transform_vector3a(world.dir),
-                    world.t_min,
-                    world.t_max,
-                );
-                let bvh = &*self.blases[blas as usize];
-                if bvh.trace::<ANY>(&mut local, &mut blas_state, &mut best) {
-                    found = Found::Instance(instance.object, bvh);
-                    if ANY {
-                        return hit(found, best, local.t_max);
-                    }
-                    world.t_max = local.t_max;
-                }
+            let (Some(placement), Traced::Blas(blas)) = (&instance.placement, instance.traced)
+            else {
+                return false;
+            };
+            let to_object = &placement.object_from_world;
+            let mut local = TraceRay::new(
+                to_object.transform_point3a(world.origin),
+                to_object.transform_vector3a(world.dir),
+                world.t_min,
+                world.t_max,
+            );
+            let bvh = &*self.blases[blas as usize];
+            if !bvh.trace::<ANY>(&mut local, boxes, &mut best) {
+                return false;
             }
+            found = Found::Instance(instance.object, bvh);
+            world.t_max = local.t_max;
+            ANY
         });
         hit(found, best, world.t_max)
     }
@@ -374,4 +413,79 @@ fn mesh_bounds(mesh: &Mesh) -> Aabb {
     (0..mesh.len() as u32)
         .filter_map(|tri| PackedTriangle::new(mesh.triangle(tri).map(Vec3A::from)))
         .fold(Aabb::empty(), |b, t| b.union(&t.aabb()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use epsm_testkit::Rng;
+    use glam::{DAffine3, DQuat};
+
+    /// A triangle soup of `count` triangles in `[-1, 1]³`.
+    fn soup(rng: &mut Rng, count: usize) -> Arc<Mesh> {
+        let mut mesh = Mesh::default();
+        for _ in 0..count {
+            let a = rng.dvec3(-1.0, 1.0).as_vec3();
+            let base = mesh.positions.len() as u32;
+            mesh.positions.extend([
+                a,
+                a + rng.dvec3(-0.4, 0.4).as_vec3(),
+                a + rng.dvec3(-0.4, 0.4).as_vec3(),
+            ]);
+            mesh.indices.push([base, base + 1, base + 2]);
+        }
+        Arc::new(mesh)
+    }
+
+    /// The AVX box tests (when the CPU has AVX) find exactly the hits of the
+    /// portable ones, through the static BVH and through instances.
+    #[test]
+    fn avx_and_portable_box_tests_agree() {
+        #[cfg(target_arch = "x86_64")]
+        let Some(avx) = Avx::detect() else {
+            return;
+        };
+        #[cfg(not(target_arch = "x86_64"))]
+        let avx = Portable;
+        let mut rng = Rng::new(17);
+        let (big, small) = (soup(&mut rng, 3000), soup(&mut rng, 50));
+        let objects: Vec<Object> = (0..6)
+            .map(|i| Object {
+                name: format!("o{i}"),
+                mesh: Arc::clone(if i % 2 == 0 { &big } else { &small }),
+                world_from_object: DAffine3::from_scale_rotation_translation(
+                    rng.dvec3(0.3, 2.0),
+                    DQuat::from_axis_angle(rng.unit(), rng.range(0.0, 6.0)),
+                    rng.dvec3(-2.0, 2.0),
+                ),
+                material: 0,
+                emission: None,
+            })
+            .collect();
+        let accel = Accel::build_with_dynamic(&objects, &[1, 4]);
+        let (mut hits, mut occluded) = (0, 0);
+        for i in 0..20_000 {
+            let origin = rng.dvec3(-4.0, 4.0).as_vec3();
+            let mut dir = rng.unit().as_vec3();
+            if i % 5 == 0 {
+                dir[rng.below(3)] = 0.0;
+            }
+            let mut ray = Ray::new(origin, dir * rng.range(0.5, 2.0) as f32);
+            if i % 3 == 0 {
+                ray.t_max = rng.range(0.0, 4.0) as f32;
+            }
+            let portable = accel.trace::<false>(&ray, Portable);
+            assert_eq!(
+                accel.trace::<false>(&ray, avx),
+                portable,
+                "ray {i}: {ray:?}"
+            );
+            let any = accel.trace::<true>(&ray, Portable).is_some();
+            assert_eq!(accel.trace::<true>(&ray, avx).is_some(), any);
+            assert_eq!(any, portable.is_some());
+            hits += usize::from(portable.is_some());
+            occluded += usize::from(any);
+        }
+        assert!(hits > 2000 && occluded == hits, "{hits} hits");
+    }
 }

@@ -2,7 +2,7 @@
 //!
 //! Model: Ylitie, Karras and Laine, "Efficient Incoherent Ray Traversal on
 //! GPUs Through Compressed Wide BVHs" (HPG 2017), as built by obvhs and
-//! walked by obvhs's `traverse!` macro, with three changes:
+//! walked in obvhs's order by our own loop (module `walk`), with four changes:
 //! - child boxes are stored as exact `f32` planes ([`WideNode`]; 224 bytes
 //!   per node instead of 80): converting 48 quantised bytes to floats was a
 //!   third of the instructions per node, and exact boxes are tighter. Measured
@@ -16,7 +16,11 @@
 //!   by `±TINY_DIR` for the slab test only (obvhs uses `±f32::EPSILON`, which
 //!   can cull boxes the ray runs along a few ULPs inside), with the sign
 //!   matching the octant test `dir < 0`, so rays with zero components never
-//!   produce NaN.
+//!   produce NaN;
+//! - the eight child boxes are tested in one pass of 256-bit AVX operations
+//!   where the CPU has AVX ([`Avx`], detected at run time), else as two
+//!   halves of 128-bit operations ([`Portable`]); both do the same operations
+//!   in the same order, so they give the same masks.
 //!
 //! No parameters.
 
@@ -46,10 +50,8 @@ pub(crate) struct TraceRay {
     pub dir: Vec3A,
     /// Constants of the watertight triangle test.
     pub shear: RayShear,
-    /// Origin components, each splat over four lanes.
-    origin4: [Vec4; 3],
-    /// Reciprocals of the clamped direction components, splat.
-    inv_dir4: [Vec4; 3],
+    /// Reciprocals of the clamped direction components.
+    inv_dir: Vec3A,
     /// Per axis, the plane side (0 = min, 1 = max) the ray enters a box by.
     near: [usize; 3],
     /// Smallest accepted `t`.
@@ -74,13 +76,11 @@ impl TraceRay {
         let oct_inv4 = ((pos & 1) * 0x0404_0404)
             | (((pos >> 1) & 1) * 0x0202_0202)
             | ((pos >> 2) * 0x0101_0101);
-        let inv = safe.recip();
         Self {
             origin,
             dir,
             shear: RayShear::new(dir),
-            origin4: [0, 1, 2].map(|a| Vec4::splat(origin[a])),
-            inv_dir4: [0, 1, 2].map(|a| Vec4::splat(inv[a])),
+            inv_dir: safe.recip(),
             near,
             t_min,
             t_max,
@@ -92,11 +92,11 @@ impl TraceRay {
 /// A CWBVH node with its eight child boxes decompressed to `f32` planes
 /// (rounded outwards by one ULP), so the slab test converts no bytes; empty
 /// child slots get inverted boxes that no ray enters. Field names follow
-/// obvhs's `CwBvhNode` so obvhs's `traverse!` macro walks these nodes.
+/// obvhs's `CwBvhNode`.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct WideNode {
-    /// `planes[axis][0 = min, 1 = max][half]`: children `4·half .. 4·half + 4`.
-    planes: [[[Vec4; 2]; 2]; 3],
+    /// `planes[axis][0 = min, 1 = max]`: one plane per child, in child order.
+    planes: [[Lanes8; 2]; 3],
     /// Index of the first inner child node.
     pub child_base_idx: u32,
     /// Index of the first leaf primitive slot.
@@ -110,7 +110,7 @@ pub(crate) struct WideNode {
 impl WideNode {
     /// `node` with exact child boxes `children` (ignored for empty slots).
     fn new(node: &CwBvhNode, children: &[Aabb; 8]) -> Self {
-        let mut planes = [[[Vec4::ZERO; 2]; 2]; 3];
+        let mut planes = [[Lanes8([0.0; 8]); 2]; 3];
         for (child, aabb) in children.iter().enumerate() {
             let empty = node.is_child_empty(child);
             for (axis, [lo, hi]) in planes.iter_mut().enumerate() {
@@ -119,8 +119,8 @@ impl WideNode {
                 } else {
                     (aabb.min[axis], aabb.max[axis])
                 };
-                lo[child / 4][child % 4] = min;
-                hi[child / 4][child % 4] = max;
+                lo.0[child] = min;
+                hi.0[child] = max;
             }
         }
         Self {
@@ -132,26 +132,13 @@ impl WideNode {
         }
     }
 
-    /// The CWBVH hit mask of `ray` against the children: bits 24..32 are
-    /// inner children to visit (in traversal order), bits 0..24 the leaf
-    /// primitives to test (Ylitie et al.'s encoding, as obvhs's
-    /// `CwBvhNode::get_child_and_index_bits`).
+    /// The CWBVH hit mask of `ray` against the children, box tests by
+    /// `boxes`: bits 24..32 are inner children to visit (in traversal order),
+    /// bits 0..24 the leaf primitives to test (Ylitie et al.'s encoding, as
+    /// obvhs's `CwBvhNode::get_child_and_index_bits`).
     #[inline(always)]
-    pub fn intersect(&self, ray: &TraceRay) -> u32 {
-        let mut hit_children = 0u32;
-        for half in 0..2 {
-            let slab = |axis: usize| {
-                let near_side = ray.near[axis] & 1;
-                let near = self.planes[axis][near_side][half];
-                let far = self.planes[axis][near_side ^ 1][half];
-                let (o, inv) = (ray.origin4[axis], ray.inv_dir4[axis]);
-                ((near - o) * inv, (far - o) * inv)
-            };
-            let ((x0, x1), (y0, y1), (z0, z1)) = (slab(0), slab(1), slab(2));
-            let t0 = x0.max(y0).max(z0).max(Vec4::splat(ray.t_min));
-            let t1 = (x1.min(y1).min(z1) * EXIT_SCALE).min(Vec4::splat(ray.t_max));
-            hit_children |= t0.cmple(t1).bitmask() << (4 * half);
-        }
+    pub fn intersect(&self, ray: &TraceRay, boxes: impl BoxTest) -> u32 {
+        let mut hit_children = boxes.hits(self, ray);
         let meta8 = u64::from_le_bytes(self.child_meta);
         let oct_inv8 = u64::from(ray.oct_inv4) * 0x1_0000_0001;
         let inner8 = ((meta8 & (meta8 << 1)) & 0x1010_1010_1010_1010) >> 4;
@@ -167,9 +154,121 @@ impl WideNode {
         }
         hit_mask
     }
+
+    /// Bit `c` set when `ray` enters child `c`'s box within its `t` range,
+    /// four children at a time with 128-bit vectors (SSE2 on x86-64).
+    #[inline(always)]
+    fn box_hits_4x2(&self, ray: &TraceRay) -> u32 {
+        let mut hit_children = 0u32;
+        for half in 0..2 {
+            let lanes = |plane: &Lanes8| Vec4::from_slice(&plane.0[4 * half..4 * half + 4]);
+            let slab = |axis: usize| {
+                let near_side = ray.near[axis] & 1;
+                let near = lanes(&self.planes[axis][near_side]);
+                let far = lanes(&self.planes[axis][near_side ^ 1]);
+                let o = Vec4::splat(ray.origin[axis]);
+                let inv = Vec4::splat(ray.inv_dir[axis]);
+                ((near - o) * inv, (far - o) * inv)
+            };
+            let ((x0, x1), (y0, y1), (z0, z1)) = (slab(0), slab(1), slab(2));
+            let t0 = x0.max(y0).max(z0).max(Vec4::splat(ray.t_min));
+            let t1 = (x1.min(y1).min(z1) * EXIT_SCALE).min(Vec4::splat(ray.t_max));
+            hit_children |= t0.cmple(t1).bitmask() << (4 * half);
+        }
+        hit_children
+    }
+
+    /// [`WideNode::box_hits_4x2`] on all eight children at once with 256-bit
+    /// AVX vectors: the same operations in the same operand order (`max`
+    /// and `min` return their second operand when one is NaN, as SSE's do),
+    /// so the same mask.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    #[inline]
+    #[allow(unsafe_code)]
+    fn box_hits_8(&self, ray: &TraceRay) -> u32 {
+        use std::arch::x86_64::{
+            __m256, _CMP_LE_OS, _mm256_cmp_ps, _mm256_load_ps, _mm256_max_ps, _mm256_min_ps,
+            _mm256_movemask_ps, _mm256_mul_ps, _mm256_set1_ps, _mm256_sub_ps,
+        };
+        // SAFETY: `Lanes8` is eight `f32` aligned to 32 bytes, exactly what
+        // the aligned load reads; AVX is enabled on this function.
+        let load = |plane: &Lanes8| -> __m256 { unsafe { _mm256_load_ps(plane.0.as_ptr()) } };
+        let slab = |axis: usize| {
+            let near_side = ray.near[axis] & 1;
+            let near = load(&self.planes[axis][near_side]);
+            let far = load(&self.planes[axis][near_side ^ 1]);
+            let o = _mm256_set1_ps(ray.origin[axis]);
+            let inv = _mm256_set1_ps(ray.inv_dir[axis]);
+            (
+                _mm256_mul_ps(_mm256_sub_ps(near, o), inv),
+                _mm256_mul_ps(_mm256_sub_ps(far, o), inv),
+            )
+        };
+        let ((x0, x1), (y0, y1), (z0, z1)) = (slab(0), slab(1), slab(2));
+        let t0 = _mm256_max_ps(
+            _mm256_max_ps(_mm256_max_ps(x0, y0), z0),
+            _mm256_set1_ps(ray.t_min),
+        );
+        let exit = _mm256_mul_ps(
+            _mm256_min_ps(_mm256_min_ps(x1, y1), z1),
+            _mm256_set1_ps(EXIT_SCALE),
+        );
+        let t1 = _mm256_min_ps(exit, _mm256_set1_ps(ray.t_max));
+        _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OS>(t0, t1)) as u32
+    }
 }
 
-/// A CWBVH of [`WideNode`]s (the `nodes` field is what `traverse!` reads).
+/// Eight `f32` lanes, one per child, aligned for one 256-bit load.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(32))]
+struct Lanes8([f32; 8]);
+
+/// How a node's eight child boxes are tested against a ray.
+pub(crate) trait BoxTest: Copy {
+    /// Bit `c` set when the ray enters child `c`'s box within its `t` range
+    /// (empty children never).
+    fn hits(self, node: &WideNode, ray: &TraceRay) -> u32;
+}
+
+/// Box tests with 128-bit vectors, on every CPU.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Portable;
+
+impl BoxTest for Portable {
+    #[inline(always)]
+    fn hits(self, node: &WideNode, ray: &TraceRay) -> u32 {
+        node.box_hits_4x2(ray)
+    }
+}
+
+/// Box tests with 256-bit AVX vectors; a value exists only on a CPU with
+/// AVX (see [`Avx::detect`]). Same masks as [`Portable`].
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Avx(());
+
+#[cfg(target_arch = "x86_64")]
+impl Avx {
+    /// The token, when the CPU has AVX.
+    #[inline(always)]
+    pub fn detect() -> Option<Self> {
+        std::arch::is_x86_feature_detected!("avx").then_some(Self(()))
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl BoxTest for Avx {
+    #[inline(always)]
+    #[allow(unsafe_code)]
+    fn hits(self, node: &WideNode, ray: &TraceRay) -> u32 {
+        // SAFETY: an `Avx` is only made by `Avx::detect` after finding AVX
+        // on this CPU, which is all `box_hits_8` requires.
+        unsafe { node.box_hits_8(ray) }
+    }
+}
+
+/// A CWBVH of [`WideNode`]s.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct WideBvh {
     /// The nodes, root first.

@@ -36,26 +36,40 @@ impl RayShear {
     /// constants, and then no hits).
     #[inline(always)]
     pub fn new(dir: Vec3A) -> Self {
+        // Branch-free (a per-ray branch on the largest axis mispredicts on
+        // incoherent rays): `kz` is x when |x| is largest, else y when
+        // |y| ≥ |z|, else z, as comparisons that a NaN fails.
         let a = dir.abs();
-        let kz = if a.x >= a.y && a.x >= a.z {
-            0
-        } else if a.y >= a.z {
-            1
-        } else {
-            2
-        };
-        let (mut kx, mut ky) = ((kz + 1) % 3, (kz + 2) % 3);
-        if dir[kz] < 0.0 {
-            std::mem::swap(&mut kx, &mut ky);
-        }
-        let sz = 1.0 / dir[kz];
-        let (ex, ey, ez) = (Vec3A::AXES[kx], Vec3A::AXES[ky], Vec3A::AXES[kz]);
-        let rows = Mat3A::from_cols(ex - dir[kx] * sz * ez, ey - dir[ky] * sz * ez, sz * ez);
+        let x_largest = (a.x >= a.y) & (a.x >= a.z);
+        let y_ge_z = a.y >= a.z;
+        let kz = usize::from(!x_largest) + usize::from(!x_largest & !y_ge_z);
+        let dz = dir.to_array()[kz];
+        let [ex, ey] = AXES_ACROSS[2 * kz + usize::from(dz < 0.0)];
+        let ez = Vec3A::AXES[kz];
+        let sz = 1.0 / dz;
+        // `dir·e` is `dir[k]` exactly (or a zero, whose sign the rows lose).
+        let rows = Mat3A::from_cols(
+            ex - dir.dot(ex) * sz * ez,
+            ey - dir.dot(ey) * sz * ez,
+            sz * ez,
+        );
         Self {
             m: rows.transpose(),
         }
     }
 }
+
+/// The unit axes `[e_kx, e_ky]` across the ray for largest axis `kz` (row
+/// `2·kz`), swapped when the direction along `kz` is negative (row
+/// `2·kz + 1`) to keep the winding.
+const AXES_ACROSS: [[Vec3A; 2]; 6] = [
+    [Vec3A::Y, Vec3A::Z],
+    [Vec3A::Z, Vec3A::Y],
+    [Vec3A::Z, Vec3A::X],
+    [Vec3A::X, Vec3A::Z],
+    [Vec3A::X, Vec3A::Y],
+    [Vec3A::Y, Vec3A::X],
+];
 
 /// One triangle's vertices, object space.
 #[derive(Clone, Copy, Debug, PartialEq)]

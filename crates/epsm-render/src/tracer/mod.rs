@@ -2,7 +2,8 @@
 //! multiple importance sampling (power heuristic), Russian roulette, rayon
 //! over tiles, and optional path recording.
 //!
-//! Determinism: every random number comes from [`PixelSampler`], keyed by
+//! Determinism: every random number comes from a
+//! [`PixelSampler`](crate::sampler::PixelSampler), keyed by
 //! `(seed, pixel, sample, dimension)`, and each pixel sums its samples in
 //! order, so an image is bit-identical whatever the thread count.
 //!
@@ -19,14 +20,23 @@ mod path;
 
 use path::{Recording, trace_path};
 
+#[cfg(target_arch = "x86_64")]
+use crate::bvh::Avx;
+use crate::bvh::{BoxTest, Portable};
 use crate::film::Image;
 use crate::record::{PathRecord, RecordLevel};
-use crate::sampler::PixelSampler;
+use crate::sampler::PixelKeys;
 use crate::scene::Scene;
 
 /// Side of the square tiles rendered by one task.
 pub const TILE: u32 = 16;
 const DIMS_PER_BOUNCE: u32 = 8;
+/// From this many samples per pixel on, the tile loop hashes each pixel's
+/// dimensions once for all its samples ([`PixelKeys`]); below, hashing them
+/// as drawn is cheaper (a path draws only some of them).
+const KEYED_SPP: u32 = 4;
+/// At most this many dimensions are hashed up front per pixel.
+const KEYED_DIMS: u32 = 2 + DIMS_PER_BOUNCE * 64;
 /// Shadow rays stop this fraction short of the light point (relative, so it
 /// works at any scene scale).
 const SHADOW_EPS: f32 = 1e-4;
@@ -138,13 +148,17 @@ pub fn trace_samples(
         .map(|s| {
             let mut counters = TraceCounters::default();
             let mut rec = PathRecord::default();
+            let width = scene.camera().width;
+            let keys = PixelKeys::new(opts.seed, s.pixel.y * width + s.pixel.x, 0);
             trace_pixel_sample(
                 scene,
                 opts,
+                &keys,
                 s.pixel,
                 s.sample,
                 Some((level, &mut rec)),
                 &mut counters,
+                Portable,
             );
             rec
         })
@@ -200,7 +214,8 @@ struct TileOutput {
     counters: TraceCounters,
 }
 
-/// Renders one tile, with the AVX2 build of the tracer where the CPU has it.
+/// Renders one tile, with the AVX2 build of the tracer (and AVX box tests)
+/// where the CPU has it.
 #[allow(unsafe_code)]
 fn render_tile(
     scene: &Scene,
@@ -209,7 +224,8 @@ fn render_tile(
     tile: UVec2,
 ) -> TileOutput {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2")
+    if let Some(avx) = Avx::detect()
+        && std::arch::is_x86_feature_detected!("avx2")
         && std::arch::is_x86_feature_detected!("bmi1")
         && std::arch::is_x86_feature_detected!("bmi2")
         && std::arch::is_x86_feature_detected!("lzcnt")
@@ -218,9 +234,9 @@ fn render_tile(
         // SAFETY: `render_tile_avx2` only requires the CPU features it
         // enables, and the CPU was just found to have each of them (AVX2
         // implies the AVX and SSE levels below it).
-        return unsafe { render_tile_avx2(scene, opts, level, tile) };
+        return unsafe { render_tile_avx2(scene, opts, level, tile, avx) };
     }
-    render_tile_body(scene, opts, level, tile)
+    render_tile_body(scene, opts, level, tile, Portable)
 }
 
 /// [`render_tile_body`] compiled for AVX2 and the bit-manipulation
@@ -238,16 +254,19 @@ fn render_tile_avx2(
     opts: &RenderOptions,
     level: Option<RecordLevel>,
     tile: UVec2,
+    avx: Avx,
 ) -> TileOutput {
-    render_tile_body(scene, opts, level, tile)
+    render_tile_body(scene, opts, level, tile, avx)
 }
 
+/// Renders one tile, box tests by `boxes`.
 #[inline(always)]
 fn render_tile_body(
     scene: &Scene,
     opts: &RenderOptions,
     level: Option<RecordLevel>,
     tile: UVec2,
+    boxes: impl BoxTest,
 ) -> TileOutput {
     let (w, h) = (scene.camera().width, scene.camera().height);
     let mut out = TileOutput {
@@ -255,9 +274,19 @@ fn render_tile_body(
         records: Vec::new(),
         counters: TraceCounters::default(),
     };
+    let keyed_dims = if opts.spp >= KEYED_SPP {
+        opts.max_depth
+            .saturating_mul(DIMS_PER_BOUNCE)
+            .saturating_add(2)
+            .min(KEYED_DIMS)
+    } else {
+        0
+    };
+    let mut keys = PixelKeys::default();
     for y in tile.y * TILE..((tile.y + 1) * TILE).min(h) {
         for x in tile.x * TILE..((tile.x + 1) * TILE).min(w) {
             let pixel = UVec2::new(x, y);
+            keys.set_pixel(opts.seed, y * w + x, keyed_dims);
             let mut sum = Vec3::ZERO;
             for s in 0..opts.spp {
                 let l = match level {
@@ -266,15 +295,26 @@ fn render_tile_body(
                         let l = trace_pixel_sample(
                             scene,
                             opts,
+                            &keys,
                             pixel,
                             s,
                             Some((level, &mut rec)),
                             &mut out.counters,
+                            boxes,
                         );
                         out.records.push(rec);
                         l
                     }
-                    None => trace_pixel_sample(scene, opts, pixel, s, None, &mut out.counters),
+                    None => trace_pixel_sample(
+                        scene,
+                        opts,
+                        &keys,
+                        pixel,
+                        s,
+                        None,
+                        &mut out.counters,
+                        boxes,
+                    ),
                 };
                 sum += l;
             }
@@ -284,19 +324,22 @@ fn render_tile_body(
     out
 }
 
-/// Traces one pixel sample; returns its radiance (zero, and counted, when it
-/// was not finite).
+/// Traces one pixel sample (the pixel's `keys`, box tests by `boxes`);
+/// returns its radiance (zero, and counted, when it was not finite).
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 fn trace_pixel_sample(
     scene: &Scene,
     opts: &RenderOptions,
+    keys: &PixelKeys,
     pixel: UVec2,
     sample: u32,
     record: Option<(RecordLevel, &mut PathRecord)>,
     counters: &mut TraceCounters,
+    boxes: impl BoxTest,
 ) -> Vec3 {
     let cam = scene.camera();
-    let mut sampler = PixelSampler::new(opts.seed, pixel.y * cam.width + pixel.x, sample, opts.spp);
+    let mut sampler = keys.sampler(sample, opts.spp);
     let film = pixel.as_vec2() + sampler.next_2d();
     let ray = cam.ray(film);
     let mut rec = record.map(|(level, rec)| {
@@ -312,7 +355,15 @@ fn trace_pixel_sample(
             done: false,
         }
     });
-    let l = trace_path(scene, opts, ray, &mut sampler, rec.as_mut(), counters);
+    let l = trace_path(
+        scene,
+        opts,
+        ray,
+        &mut sampler,
+        rec.as_mut(),
+        counters,
+        boxes,
+    );
     let l = if l.is_finite() {
         l
     } else {

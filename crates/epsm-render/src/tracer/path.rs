@@ -4,6 +4,7 @@
 use glam::Vec3;
 
 use super::{DIMS_PER_BOUNCE, RenderOptions, SHADOW_EPS, TraceCounters};
+use crate::bvh::BoxTest;
 use crate::frame::Frame;
 use crate::hit::SurfacePoint;
 use crate::materials::{Material, VertexKind};
@@ -29,17 +30,18 @@ fn mis(a: f32, b: f32) -> f32 {
     if a2 + b2 > 0.0 { a2 / (a2 + b2) } else { 0.0 }
 }
 
-/// Traces a path from a camera ray; returns its radiance. Always inlined,
-/// as are the BVH queries it makes, so the AVX2 build of the tile loop
-/// compiles them too.
+/// Traces a path from a camera ray (box tests by `boxes`); returns its
+/// radiance. Always inlined, as are the BVH queries it makes, so the AVX2
+/// build of the tile loop compiles them too.
 #[inline(always)]
 pub(super) fn trace_path(
     scene: &Scene,
     opts: &RenderOptions,
     mut ray: Ray,
-    sampler: &mut PixelSampler,
+    sampler: &mut PixelSampler<'_>,
     mut rec: Option<&mut Recording<'_>>,
     counters: &mut TraceCounters,
+    boxes: impl BoxTest,
 ) -> Vec3 {
     let objects = scene.objects();
     let lights = scene.lights();
@@ -56,7 +58,7 @@ pub(super) fn trace_path(
         counters.rays += 1;
 
         // Find the next vertex; rays that leave see the background.
-        let Some(hit) = scene.accel().closest_hit(&ray) else {
+        let Some(hit) = scene.accel().closest_hit_with(&ray, boxes) else {
             let dir = ray.dir.normalize();
             let le = scene.background().eval(dir);
             if le != Vec3::ZERO {
@@ -103,7 +105,7 @@ pub(super) fn trace_path(
             wi_world,
             material,
         };
-        let nee = next_event(scene, &shading, beta, sampler, record_at, counters);
+        let nee = next_event(scene, &shading, beta, sampler, record_at, counters, boxes);
         contribution += nee.contribution;
         let connection = nee.connection;
         radiance += contribution;
@@ -202,15 +204,17 @@ struct NextEvent {
 }
 
 /// Samples a light, evaluates the BSDF toward it, MIS-weights against BSDF
-/// sampling and traces the shadow ray. Consumes three random numbers.
+/// sampling and traces the shadow ray (box tests by `boxes`). Consumes three
+/// random numbers.
 #[inline(always)]
 fn next_event(
     scene: &Scene,
     at: &Shading<'_>,
     beta: Vec3,
-    sampler: &mut PixelSampler,
+    sampler: &mut PixelSampler<'_>,
     record_at: Option<u32>,
     counters: &mut TraceCounters,
+    boxes: impl BoxTest,
 ) -> NextEvent {
     let mut out = NextEvent {
         contribution: Vec3::ZERO,
@@ -238,7 +242,7 @@ fn next_event(
     let unoccluded = beta * f * ls.radiance * (w / ls.pdf);
     let shadow = shadow_ray(at.sp, ls.wo, ls.position, ls.dist);
     counters.shadow_rays += 1;
-    let blocked = scene.accel().occluded(&shadow);
+    let blocked = scene.accel().occluded_with(&shadow, boxes);
     if !blocked {
         out.contribution = unoccluded;
     }
