@@ -3,7 +3,7 @@
 //! | format | read | write |
 //! |---|---|---|
 //! | `.png` | 8- or 16-bit, decoded from sRGB to linear; alpha ignored | 8-bit RGB, values clamped to [0, 1] and sRGB-encoded; non-finite → 0 |
-//! | `.exr` | first RGB(A) layer, linear; alpha ignored | 32-bit float RGB, exact (non-finite values kept) |
+//! | `.exr` | first RGB(A) layer, linear; alpha ignored | 32-bit float RGB, exact (non-finite values kept); RLE tiles of 64², written in increasing order so the bytes depend only on the pixels |
 //!
 //! The format is chosen by the (case-insensitive) extension; anything else is
 //! an error. Writes are atomic: the image goes to a temporary file in the
@@ -173,7 +173,14 @@ fn write_exr(path: &Path, img: &Image, mut out: impl Write + std::io::Seek) -> R
         let p = img.get(pos.x() as u32, pos.y() as u32);
         (p.x, p.y, p.z)
     });
-    exr::image::Image::from_channels(size, channels)
+    // The exr crate compresses blocks on several threads; with its default
+    // unspecified line order it writes them as they finish, so the same
+    // image could give different files. Increasing order sorts them.
+    let encoding = exr::image::Encoding {
+        line_order: exr::meta::attribute::LineOrder::Increasing,
+        ..exr::image::Encoding::FAST_LOSSLESS
+    };
+    exr::image::Image::from_encoded_channels(size, encoding, channels)
         .write()
         .to_buffered(&mut out)
         .map_err(|e| image_error(path, e))?;
@@ -240,6 +247,30 @@ mod tests {
         write_image(&path, &img).expect("write exr");
         let back = read_image(&path).expect("read exr");
         assert_eq!(back, img);
+    }
+
+    #[test]
+    fn exr_bytes_depend_only_on_the_pixels() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let mut img = Image::new(300, 200);
+        for y in 0..200 {
+            for x in 0..300 {
+                let v = ((x * 7 + y * 13) % 97) as f32 / 97.0;
+                img.set(x, y, Vec3::new(v, 1.0 - v, v * v));
+            }
+        }
+        let first = dir.path().join("first.exr");
+        write_image(&first, &img).expect("write exr");
+        let bytes = std::fs::read(&first).expect("read bytes");
+        for i in 0..8 {
+            let again = dir.path().join(format!("again{i}.exr"));
+            write_image(&again, &img).expect("write exr");
+            assert_eq!(
+                std::fs::read(&again).expect("read bytes"),
+                bytes,
+                "write {i}"
+            );
+        }
     }
 
     #[test]
