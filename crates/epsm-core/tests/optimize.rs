@@ -108,6 +108,29 @@ true = 0.8
 }
 
 #[test]
+fn spp_match_gives_the_loss_its_own_render() {
+    // With `spp_match` the OT loss compares an independent render: the loss
+    // no longer depends on the gradient pass's sample count, the gradient
+    // (its differentiated paths) still does. Without it the loss is the
+    // gradient pass's own image.
+    let eval = |spp_grad: u32, spp_match: Option<u32>| {
+        let mut p = tiny(TRANSLATE);
+        p.passes.spp_grad = spp_grad;
+        p.passes.spp_match = spp_match;
+        let opt = Optimization::new(p).expect("setup");
+        let (g, records) = opt.gradient().expect("gradient");
+        assert_eq!(records.len() as u32, 32 * 32 * spp_grad);
+        (g.loss.value, g.grad[0])
+    };
+    let (a, b) = (eval(2, Some(8)), eval(4, Some(8)));
+    assert_eq!(a.0, b.0, "the loss follows the matched render only");
+    assert_ne!(a.1, b.1, "the gradient follows the recorded paths");
+    let (c, d) = (eval(2, None), eval(4, None));
+    assert_ne!(c.0, d.0, "without spp_match the loss is the pass's image");
+    assert!(a.1 > 0.0 && b.1 > 0.0, "{a:?} {b:?}");
+}
+
+#[test]
 fn a_resumed_run_follows_the_uninterrupted_trajectory() {
     let mut p = tiny(TRANSLATE);
     p.optimizer.iterations = 4;

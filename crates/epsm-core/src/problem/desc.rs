@@ -167,6 +167,11 @@ pub struct RenderPassDesc {
     pub spp_primal: u32,
     /// Gradient pass at the match resolution (records paths), ≥ 1.
     pub spp_grad: u32,
+    /// The image the loss compares at the match resolution, when it is an
+    /// independent render with its own sample count (≥ 1); absent: OT
+    /// compares the gradient pass's own image, L2 an independent render
+    /// at `spp_grad`.
+    pub spp_match: Option<u32>,
 }
 
 impl Default for RenderPassDesc {
@@ -174,6 +179,7 @@ impl Default for RenderPassDesc {
         Self {
             spp_primal: 8,
             spp_grad: 4,
+            spp_match: None,
         }
     }
 }

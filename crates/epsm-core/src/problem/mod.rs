@@ -119,6 +119,40 @@ pub struct Passes {
     pub spp_primal: u32,
     /// Gradient pass at the match resolution.
     pub spp_grad: u32,
+    /// Samples per pixel of an independent render at the match resolution
+    /// that the loss compares with the target (see [`Passes::loss_image`]).
+    pub spp_match: Option<u32>,
+}
+
+/// Which image an iteration's loss compares with the target.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LossImage {
+    /// The gradient pass's own image (its paths are differentiated).
+    GradientPass,
+    /// An independent render at the match resolution with this many
+    /// samples per pixel.
+    Independent(u32),
+}
+
+impl Passes {
+    /// The image the loss compares, for an OT (`ot = true`) or L2 iteration.
+    ///
+    /// L2 always takes an independent render (`spp_match`, else
+    /// `spp_grad`): its gradient `2(c − c*)·dc/dθ` is biased when `c` and
+    /// `dc/dθ` share samples. OT takes the gradient pass's image unless
+    /// `spp_match` is set: the matching of a noisy image to a clean target
+    /// is biased (noisy pixels trade places with similar-coloured
+    /// neighbours across edges, and when the neighbour does not move with θ
+    /// the trade pulls the moving side one way), a bias that falls with the
+    /// matched image's variance, not with the number of differentiated
+    /// paths.
+    pub fn loss_image(&self, ot: bool) -> LossImage {
+        match (self.spp_match, ot) {
+            (Some(spp), _) => LossImage::Independent(spp),
+            (None, true) => LossImage::GradientPass,
+            (None, false) => LossImage::Independent(self.spp_grad),
+        }
+    }
 }
 
 /// A complete optimization problem.
@@ -177,6 +211,7 @@ impl Problem {
             passes: Passes {
                 spp_primal: render.spp_primal,
                 spp_grad: render.spp_grad,
+                spp_match: render.spp_match,
             },
             out_dir: PathBuf::from(output.dir),
             checkpoint_every: output.checkpoint_every,

@@ -222,6 +222,11 @@ pub(super) fn problem(d: &ProblemDesc, file: &Path, locator: &Locator) -> OptRes
         passes: Passes {
             spp_primal: c.count("render.spp_primal", d.render.spp_primal, 1, 1 << 16)?,
             spp_grad: c.count("render.spp_grad", d.render.spp_grad, 1, 1 << 16)?,
+            spp_match: d
+                .render
+                .spp_match
+                .map(|v| c.count("render.spp_match", v, 1, 1 << 16))
+                .transpose()?,
         },
         out_dir: d.output.dir.clone().into(),
         checkpoint_every: d.output.checkpoint_every,

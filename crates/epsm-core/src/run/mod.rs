@@ -44,7 +44,7 @@ use crate::colour::{ColourModel, PrimaryMotion};
 use crate::loss::{LossEval, add_flow, evaluate, resample, rmse};
 use crate::optim::{Adam, AdamSettings};
 use crate::params::ParamTable;
-use crate::problem::{Problem, Target};
+use crate::problem::{LossImage, Problem, Target};
 use crate::report::{Row, Timings, param_error};
 use crate::schedule::Schedule;
 
@@ -260,13 +260,9 @@ impl Optimization {
             ..RenderOptions::from_scene(&self.grad.scene)
         };
         let (out, records) = render_recorded(&self.grad.scene, &opts, level, &|_| {});
-        // L2's gradient `2(c − c*)·dc/dθ` is biased when `c` and `dc/dθ` share
-        // samples (it then also lowers the variance): its `c` comes from an
-        // independent render.
-        let image = if l2 {
-            render_image(&self.grad.scene, spp, self.seed(2))
-        } else {
-            out.image.clone()
+        let image = match self.problem.passes.loss_image(!l2) {
+            LossImage::GradientPass => out.image.clone(),
+            LossImage::Independent(spp) => render_image(&self.grad.scene, spp, self.seed(2)),
         };
         let t1 = Instant::now();
         let kind = self.schedule.loss_at(self.iteration);
