@@ -25,6 +25,7 @@ done
   echo "Measured on $(nproc) cores, release build, $(date -u +%Y-%m-%d)."
   echo "Parameter error: RMS of θ − θ_true in the parameters' units (scene units, degrees, albedo);"
   echo "image RMSE: linear RGB against the target at the scene resolution."
+  echo "What each problem tests, its initial error and notes on its set-up: \`docs/suite.md\`."
   echo
   echo "Seconds per iteration (mean): primal render, gradient-pass trace, matching, solves."
   echo
