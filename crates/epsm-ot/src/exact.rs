@@ -36,12 +36,14 @@ mod auction;
 pub mod dense;
 mod sparse;
 
+use std::time::Instant;
+
 use rayon::prelude::*;
 
 use crate::blocks::{Clustered, fit_potentials, kept_targets};
 use crate::cost::{diameter_sq, sq_dist_f64};
 use crate::error::OtError;
-use crate::plan::{OtResult, SolveStats};
+use crate::plan::{OtResult, PhaseTimes, SolveStats};
 use crate::points::{PointCloud, check_pair};
 use crate::sinkhorn::{SinkhornSettings, solve_dual};
 use sparse::SparseAssignment;
@@ -133,9 +135,16 @@ pub fn solve(
     if n < settings.dense_below.max(2) {
         return dense::solve(source, target);
     }
-    let x = Clustered::new(source, settings.warm_start.cluster_size);
-    let y = Clustered::new(target, settings.warm_start.cluster_size);
-    let solved = solve_sorted(&x, &y, diameter_sq(source, target), settings);
+    let mut phases = PhaseTimes::default();
+    let (x, y) = phases.time("cluster", || {
+        (
+            Clustered::new(source, settings.warm_start.cluster_size),
+            Clustered::new(target, settings.warm_start.cluster_size),
+        )
+    });
+    let mut solved = solve_sorted(&x, &y, diameter_sq(source, target), settings);
+    phases.merge(&solved.stats.phases);
+    solved.stats.phases = phases;
     let mut perm = vec![0usize; n];
     for (k, &j) in solved.perm.iter().enumerate() {
         perm[x.order[k] as usize] = y.order[j] as usize;
@@ -160,23 +169,36 @@ pub(crate) struct SortedAssignment {
     pub stats: SolveStats,
 }
 
-/// Steps 1–4 of the module doc on clustered clouds.
-pub(crate) fn solve_sorted(
+/// Near-optimal prices from steps 1–3 of the module doc: the candidate graph and the auction's prices.
+pub(crate) struct Prices {
+    /// Candidate edges per sorted source point: (sorted target, cost).
+    pub edges: Vec<Vec<(u32, f64)>>,
+    /// Column potentials (the negated auction prices, or the warm start's `g` if the auction gave up).
+    pub v: Vec<f64>,
+    /// Work counters and phase times so far.
+    pub stats: SolveStats,
+}
+
+/// Steps 1–3 of the module doc without the optimality check: the warm start,
+/// the candidate graph and the auction's prices (feasible on the graph only).
+pub(crate) fn sparse_prices(
     x: &Clustered,
     y: &Clustered,
     diameter_sq: f64,
     settings: &ExactSettings,
-) -> SortedAssignment {
-    let n = x.cloud.len();
-
+) -> Prices {
     // Warm start and candidate graph.
-    let dual = solve_dual(x, y, diameter_sq, &settings.warm_start);
+    let mut phases = PhaseTimes::default();
+    let dual = phases.time("warm_start", || {
+        solve_dual(x, y, diameter_sq, &settings.warm_start)
+    });
     let (f, g) = (dual.f, dual.g);
     let mut stats = SolveStats {
         pair_evaluations: dual.pairs,
         ..SolveStats::default()
     };
     let k = settings.candidates;
+    let candidates_start = Instant::now();
     let mut edges = best_partners(x, y, &dual.support.rows, &g, k);
     for (j, row) in best_partners(y, x, &dual.support.cols, &f, k)
         .into_iter()
@@ -195,21 +217,45 @@ pub(crate) fn solve_sorted(
         row.sort_unstable_by_key(|e| e.0);
         row.dedup_by_key(|e| e.0);
     }
+    phases.add("candidates", candidates_start.elapsed().as_secs_f64());
     // Price discovery by auction, then an exact shortest-augmenting-path finish.
     let mut q: Vec<f64> = g.iter().map(|&t| -t).collect();
-    let v = match auction::run(
-        &edges,
-        &mut q,
-        settings.auction_start,
-        settings.auction_end,
-        0.2,
-    ) {
+    let auctioned = phases.time("auction", || {
+        auction::run(
+            &edges,
+            &mut q,
+            settings.auction_start,
+            settings.auction_end,
+            0.2,
+        )
+    });
+    let v = match auctioned {
         Some(_) => q.iter().map(|&t| -t).collect(),
         None => g,
     };
+    stats.phases = phases;
+    Prices { edges, v, stats }
+}
+
+/// Steps 1–4 of the module doc on clustered clouds.
+pub(crate) fn solve_sorted(
+    x: &Clustered,
+    y: &Clustered,
+    diameter_sq: f64,
+    settings: &ExactSettings,
+) -> SortedAssignment {
+    let n = x.cloud.len();
+    let k = settings.candidates;
+    let Prices {
+        edges,
+        v,
+        mut stats,
+    } = sparse_prices(x, y, diameter_sq, settings);
+    let mut phases = std::mem::take(&mut stats.phases);
     let mut lsap = SparseAssignment::new(edges, v);
     loop {
         stats.iterations += 1;
+        let augment_start = Instant::now();
         for i in lsap.free_rows() {
             if !lsap.augment(i) {
                 let full: Vec<(u32, u32, f64)> = (0..n)
@@ -230,13 +276,16 @@ pub(crate) fn solve_sorted(
                 );
             }
         }
+        phases.add("augment", augment_start.elapsed().as_secs_f64());
         // Optimality check over all pairs; add each row's worst violators and solve again.
         let rows = lsap.take_raised();
-        let (violations, checked) =
-            violations(x, y, &lsap.u, &lsap.v, settings.tolerance, k, &rows);
+        let (violations, checked) = phases.time("check", || {
+            violations(x, y, &lsap.u, &lsap.v, settings.tolerance, k, &rows)
+        });
         stats.pair_evaluations += checked;
         if violations.is_empty() {
             stats.candidate_pairs = lsap.edge_count();
+            stats.phases = phases;
             return SortedAssignment {
                 perm: lsap.permutation(),
                 u: lsap.u,
