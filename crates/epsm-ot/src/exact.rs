@@ -15,7 +15,8 @@
 //!    matching exactly complementary-slack with them (`sparse`).
 //! 4. **Optimality check**: a streaming pass over all pairs of the rows whose
 //!    potential rose since the last check (the others cannot have gained a
-//!    violation: see `sparse`; block pairs are
+//!    violation: see `sparse`; each pair is screened in `f32` first and
+//!    tested in `f64` only if the screen cannot rule it out; block pairs are
 //!    skipped only when a rigorous bound proves `c_ij − u_i − v_j ≥ 0` for
 //!    all of them, see `blocks`) collects every pair with reduced cost below
 //!    `−tolerance`; each row's `candidates` worst violators are added to the
