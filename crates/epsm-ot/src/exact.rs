@@ -12,7 +12,9 @@
 //!    perfect matching (grid order) so the graph always has one.
 //! 3. **Sparse solve**: an ε-scaling auction from prices `−g` finds near-optimal
 //!    potentials (`auction`), then shortest augmenting paths make the
-//!    matching exactly complementary-slack with them (`sparse`).
+//!    matching exactly complementary-slack with them (`sparse`). Whenever
+//!    more than 1/16 of the rows are unmatched (after step 4 added violated
+//!    pairs), the auction first re-prices all rows from the current potentials.
 //! 4. **Optimality check**: a streaming pass over all pairs of the rows whose
 //!    potential rose since the last check (the others cannot have gained a
 //!    violation: see `sparse`; each pair is screened in `f32` first and
@@ -256,6 +258,27 @@ pub(crate) fn solve_sorted(
     let mut lsap = SparseAssignment::new(edges, v);
     loop {
         stats.iterations += 1;
+        if lsap.free_rows().len() * REPRICE_BELOW > n {
+            // Many rows are free (added violated edges unmatch their rows): re-price
+            // all rows by auction from the current prices, far cheaper than one
+            // shortest-augmenting-path search per free row from poor potentials.
+            let (edges, v) = lsap.into_parts();
+            let mut q: Vec<f64> = v.iter().map(|&t| -t).collect();
+            let auctioned = phases.time("auction", || {
+                auction::run(
+                    &edges,
+                    &mut q,
+                    settings.auction_start,
+                    settings.auction_end,
+                    0.2,
+                )
+            });
+            let v = match auctioned {
+                Some(_) => q.iter().map(|&t| -t).collect(),
+                None => v,
+            };
+            lsap = SparseAssignment::new(edges, v);
+        }
         let augment_start = Instant::now();
         for i in lsap.free_rows() {
             if !lsap.augment(i) {
@@ -298,6 +321,9 @@ pub(crate) fn solve_sorted(
         lsap.add_edges(&violations);
     }
 }
+
+/// The sparse solve re-prices every row by auction when more than `n / REPRICE_BELOW` rows are free.
+const REPRICE_BELOW: usize = 16;
 
 /// For each point of `x`, the `k` points of `y` with the smallest `c_ij − pot_j` inside the listed blocks.
 fn best_partners(
