@@ -21,7 +21,7 @@
 //!    tested in `f64` only if the screen cannot rule it out; block pairs are
 //!    skipped only when a rigorous bound proves `c_ij − u_i − v_j ≥ 0` for
 //!    all of them, see `blocks`) collects every pair with reduced cost below
-//!    `−tolerance`; each row's `candidates` worst violators are added to the
+//!    `−tolerance`; each row's 4 × `candidates` worst violators are added to the
 //!    graph and the augmenting-path solve resumes. When none
 //!    remain, `u, v` are feasible for the full problem and tight on the
 //!    matching, so the matching is optimal (to within `n · tolerance` in total cost).
@@ -304,7 +304,15 @@ pub(crate) fn solve_sorted(
         // Optimality check over all pairs; add each row's worst violators and solve again.
         let rows = lsap.take_raised();
         let (violations, checked) = phases.time("check", || {
-            violations(x, y, &lsap.u, &lsap.v, settings.tolerance, k, &rows)
+            violations(
+                x,
+                y,
+                &lsap.u,
+                &lsap.v,
+                settings.tolerance,
+                VIOLATORS_PER_CANDIDATE * k,
+                &rows,
+            )
         });
         stats.pair_evaluations += checked;
         if violations.is_empty() {
@@ -321,6 +329,9 @@ pub(crate) fn solve_sorted(
         lsap.add_edges(&violations);
     }
 }
+
+/// Each check adds this many times `candidates` worst violators per row (fewer, costlier rounds otherwise).
+const VIOLATORS_PER_CANDIDATE: usize = 4;
 
 /// The sparse solve re-prices every row by auction when more than `n / REPRICE_BELOW` rows are free.
 const REPRICE_BELOW: usize = 16;
