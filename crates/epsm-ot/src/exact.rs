@@ -222,20 +222,7 @@ pub(crate) fn sparse_prices(
     }
     phases.add("candidates", candidates_start.elapsed().as_secs_f64());
     // Price discovery by auction, then an exact shortest-augmenting-path finish.
-    let mut q: Vec<f64> = g.iter().map(|&t| -t).collect();
-    let auctioned = phases.time("auction", || {
-        auction::run(
-            &edges,
-            &mut q,
-            settings.auction_start,
-            settings.auction_end,
-            0.2,
-        )
-    });
-    let v = match auctioned {
-        Some(_) => q.iter().map(|&t| -t).collect(),
-        None => g,
-    };
+    let v = phases.time("auction", || auction_potentials(&edges, g, settings));
     stats.phases = phases;
     Prices { edges, v, stats }
 }
@@ -263,20 +250,7 @@ pub(crate) fn solve_sorted(
             // all rows by auction from the current prices, far cheaper than one
             // shortest-augmenting-path search per free row from poor potentials.
             let (edges, v) = lsap.into_parts();
-            let mut q: Vec<f64> = v.iter().map(|&t| -t).collect();
-            let auctioned = phases.time("auction", || {
-                auction::run(
-                    &edges,
-                    &mut q,
-                    settings.auction_start,
-                    settings.auction_end,
-                    0.2,
-                )
-            });
-            let v = match auctioned {
-                Some(_) => q.iter().map(|&t| -t).collect(),
-                None => v,
-            };
+            let v = phases.time("auction", || auction_potentials(&edges, v, settings));
             lsap = SparseAssignment::new(edges, v);
         }
         let augment_start = Instant::now();
@@ -327,6 +301,26 @@ pub(crate) fn solve_sorted(
         }
         stats.added_pairs += violations.len();
         lsap.add_edges(&violations);
+    }
+}
+
+/// Column potentials from an ε-scaling auction on `edges` started at prices `−v`
+/// (`v` itself if the auction runs out of bids).
+fn auction_potentials(
+    edges: &[Vec<(u32, f64)>],
+    v: Vec<f64>,
+    settings: &ExactSettings,
+) -> Vec<f64> {
+    let mut q: Vec<f64> = v.iter().map(|&t| -t).collect();
+    match auction::run(
+        edges,
+        &mut q,
+        settings.auction_start,
+        settings.auction_end,
+        0.2,
+    ) {
+        Some(_) => q.iter().map(|&t| -t).collect(),
+        None => v,
     }
 }
 
