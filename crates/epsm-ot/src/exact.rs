@@ -12,13 +12,16 @@
 //!    perfect matching (grid order) so the graph always has one.
 //! 3. **Sparse solve**: an ε-scaling auction from prices `−g` finds near-optimal
 //!    potentials (`auction`), then shortest augmenting paths make the
-//!    matching exactly complementary-slack with them (`sparse`).
+//!    matching exactly complementary-slack with them (`sparse`). Whenever
+//!    more than 1/16 of the rows are unmatched (after step 4 added violated
+//!    pairs), the auction first re-prices all rows from the current potentials.
 //! 4. **Optimality check**: a streaming pass over all pairs of the rows whose
 //!    potential rose since the last check (the others cannot have gained a
-//!    violation: see `sparse`; block pairs are
+//!    violation: see `sparse`; each pair is screened in `f32` first and
+//!    tested in `f64` only if the screen cannot rule it out; block pairs are
 //!    skipped only when a rigorous bound proves `c_ij − u_i − v_j ≥ 0` for
 //!    all of them, see `blocks`) collects every pair with reduced cost below
-//!    `−tolerance`; each row's `candidates` worst violators are added to the
+//!    `−tolerance`; each row's 4 × `candidates` worst violators are added to the
 //!    graph and the augmenting-path solve resumes. When none
 //!    remain, `u, v` are feasible for the full problem and tight on the
 //!    matching, so the matching is optimal (to within `n · tolerance` in total cost).
@@ -36,12 +39,14 @@ mod auction;
 pub mod dense;
 mod sparse;
 
+use std::time::Instant;
+
 use rayon::prelude::*;
 
 use crate::blocks::{Clustered, fit_potentials, kept_targets};
 use crate::cost::{diameter_sq, sq_dist_f64};
 use crate::error::OtError;
-use crate::plan::{OtResult, SolveStats};
+use crate::plan::{OtResult, PhaseTimes, SolveStats};
 use crate::points::{PointCloud, check_pair};
 use crate::sinkhorn::{SinkhornSettings, solve_dual};
 use sparse::SparseAssignment;
@@ -133,9 +138,16 @@ pub fn solve(
     if n < settings.dense_below.max(2) {
         return dense::solve(source, target);
     }
-    let x = Clustered::new(source, settings.warm_start.cluster_size);
-    let y = Clustered::new(target, settings.warm_start.cluster_size);
-    let solved = solve_sorted(&x, &y, diameter_sq(source, target), settings);
+    let mut phases = PhaseTimes::default();
+    let (x, y) = phases.time("cluster", || {
+        (
+            Clustered::new(source, settings.warm_start.cluster_size),
+            Clustered::new(target, settings.warm_start.cluster_size),
+        )
+    });
+    let mut solved = solve_sorted(&x, &y, diameter_sq(source, target), settings);
+    phases.merge(&solved.stats.phases);
+    solved.stats.phases = phases;
     let mut perm = vec![0usize; n];
     for (k, &j) in solved.perm.iter().enumerate() {
         perm[x.order[k] as usize] = y.order[j] as usize;
@@ -160,23 +172,36 @@ pub(crate) struct SortedAssignment {
     pub stats: SolveStats,
 }
 
-/// Steps 1–4 of the module doc on clustered clouds.
-pub(crate) fn solve_sorted(
+/// Near-optimal prices from steps 1–3 of the module doc: the candidate graph and the auction's prices.
+pub(crate) struct Prices {
+    /// Candidate edges per sorted source point: (sorted target, cost).
+    pub edges: Vec<Vec<(u32, f64)>>,
+    /// Column potentials (the negated auction prices, or the warm start's `g` if the auction gave up).
+    pub v: Vec<f64>,
+    /// Work counters and phase times so far.
+    pub stats: SolveStats,
+}
+
+/// Steps 1–3 of the module doc without the optimality check: the warm start,
+/// the candidate graph and the auction's prices (feasible on the graph only).
+pub(crate) fn sparse_prices(
     x: &Clustered,
     y: &Clustered,
     diameter_sq: f64,
     settings: &ExactSettings,
-) -> SortedAssignment {
-    let n = x.cloud.len();
-
+) -> Prices {
     // Warm start and candidate graph.
-    let dual = solve_dual(x, y, diameter_sq, &settings.warm_start);
+    let mut phases = PhaseTimes::default();
+    let dual = phases.time("warm_start", || {
+        solve_dual(x, y, diameter_sq, &settings.warm_start)
+    });
     let (f, g) = (dual.f, dual.g);
     let mut stats = SolveStats {
         pair_evaluations: dual.pairs,
         ..SolveStats::default()
     };
     let k = settings.candidates;
+    let candidates_start = Instant::now();
     let mut edges = best_partners(x, y, &dual.support.rows, &g, k);
     for (j, row) in best_partners(y, x, &dual.support.cols, &f, k)
         .into_iter()
@@ -195,21 +220,40 @@ pub(crate) fn solve_sorted(
         row.sort_unstable_by_key(|e| e.0);
         row.dedup_by_key(|e| e.0);
     }
+    phases.add("candidates", candidates_start.elapsed().as_secs_f64());
     // Price discovery by auction, then an exact shortest-augmenting-path finish.
-    let mut q: Vec<f64> = g.iter().map(|&t| -t).collect();
-    let v = match auction::run(
-        &edges,
-        &mut q,
-        settings.auction_start,
-        settings.auction_end,
-        0.2,
-    ) {
-        Some(_) => q.iter().map(|&t| -t).collect(),
-        None => g,
-    };
+    let v = phases.time("auction", || auction_potentials(&edges, g, settings));
+    stats.phases = phases;
+    Prices { edges, v, stats }
+}
+
+/// Steps 1–4 of the module doc on clustered clouds.
+pub(crate) fn solve_sorted(
+    x: &Clustered,
+    y: &Clustered,
+    diameter_sq: f64,
+    settings: &ExactSettings,
+) -> SortedAssignment {
+    let n = x.cloud.len();
+    let k = settings.candidates;
+    let Prices {
+        edges,
+        v,
+        mut stats,
+    } = sparse_prices(x, y, diameter_sq, settings);
+    let mut phases = std::mem::take(&mut stats.phases);
     let mut lsap = SparseAssignment::new(edges, v);
     loop {
         stats.iterations += 1;
+        if lsap.free_rows().len() * REPRICE_BELOW > n {
+            // Many rows are free (added violated edges unmatch their rows): re-price
+            // all rows by auction from the current prices, far cheaper than one
+            // shortest-augmenting-path search per free row from poor potentials.
+            let (edges, v) = lsap.into_parts();
+            let v = phases.time("auction", || auction_potentials(&edges, v, settings));
+            lsap = SparseAssignment::new(edges, v);
+        }
+        let augment_start = Instant::now();
         for i in lsap.free_rows() {
             if !lsap.augment(i) {
                 let full: Vec<(u32, u32, f64)> = (0..n)
@@ -230,13 +274,24 @@ pub(crate) fn solve_sorted(
                 );
             }
         }
+        phases.add("augment", augment_start.elapsed().as_secs_f64());
         // Optimality check over all pairs; add each row's worst violators and solve again.
         let rows = lsap.take_raised();
-        let (violations, checked) =
-            violations(x, y, &lsap.u, &lsap.v, settings.tolerance, k, &rows);
+        let (violations, checked) = phases.time("check", || {
+            violations(
+                x,
+                y,
+                &lsap.u,
+                &lsap.v,
+                settings.tolerance,
+                VIOLATORS_PER_CANDIDATE * k,
+                &rows,
+            )
+        });
         stats.pair_evaluations += checked;
         if violations.is_empty() {
             stats.candidate_pairs = lsap.edge_count();
+            stats.phases = phases;
             return SortedAssignment {
                 perm: lsap.permutation(),
                 u: lsap.u,
@@ -248,6 +303,32 @@ pub(crate) fn solve_sorted(
         lsap.add_edges(&violations);
     }
 }
+
+/// Column potentials from an ε-scaling auction on `edges` started at prices `−v`
+/// (`v` itself if the auction runs out of bids).
+fn auction_potentials(
+    edges: &[Vec<(u32, f64)>],
+    v: Vec<f64>,
+    settings: &ExactSettings,
+) -> Vec<f64> {
+    let mut q: Vec<f64> = v.iter().map(|&t| -t).collect();
+    match auction::run(
+        edges,
+        &mut q,
+        settings.auction_start,
+        settings.auction_end,
+        0.2,
+    ) {
+        Some(_) => q.iter().map(|&t| -t).collect(),
+        None => v,
+    }
+}
+
+/// Each check adds this many times `candidates` worst violators per row (fewer, costlier rounds otherwise).
+const VIOLATORS_PER_CANDIDATE: usize = 4;
+
+/// The sparse solve re-prices every row by auction when more than `n / REPRICE_BELOW` rows are free.
+const REPRICE_BELOW: usize = 16;
 
 /// For each point of `x`, the `k` points of `y` with the smallest `c_ij − pot_j` inside the listed blocks.
 fn best_partners(
@@ -292,6 +373,9 @@ type Edge = (u32, u32, f64);
 
 /// For each row flagged in `rows`, its `per_row` most violated pairs
 /// (`c_ij − u_i − v_j < −tolerance`), and the number of pairs evaluated.
+///
+/// Each pair is first screened in `f32` (see [`screened_block`]); only pairs
+/// the screen cannot rule out are tested in `f64`, so no violation is missed.
 fn violations(
     x: &Clustered,
     y: &Clustered,
@@ -302,6 +386,10 @@ fn violations(
     rows: &[bool],
 ) -> (Vec<Edge>, u64) {
     let (fit_u, fit_v) = (fit_potentials(x, u), fit_potentials(y, v));
+    let (u32s, v32s) = (to_f32(u), to_f32(v));
+    // Potentials beyond the f32 range: no screen, every pair is tested in f64.
+    let screen = u32s.iter().chain(&v32s).all(|t| t.is_finite());
+    let cols = y.cloud.columns();
     let parts: Vec<(Vec<Edge>, u64)> = x
         .clusters
         .par_iter()
@@ -317,26 +405,35 @@ fn violations(
                 .iter()
                 .map(|&jb| y.clusters[jb as usize].range.len() as u64)
                 .sum();
+            let mut slack = [0.0f32; SCREEN_BLOCK];
             for i in ci.range.clone().filter(|&i| rows[i]) {
                 let p = x.cloud.point(i);
                 let mut row: Vec<(f64, u32, f64)> = Vec::new();
-                for j in list
-                    .iter()
-                    .flat_map(|&jb| y.clusters[jb as usize].range.clone())
-                {
-                    let c = sq_dist_f64(&p, &y.cloud.point(j));
-                    let reduced = c - u[i] - v[j];
-                    // Rounding of c, u and v is not a violation (matters for far-apart clouds).
-                    if reduced < -(tolerance + 4.0 * f64::EPSILON * (c + u[i].abs() + v[j].abs())) {
-                        row.push((reduced, j as u32, c));
+                for &jb in &list {
+                    let range = y.clusters[jb as usize].range.clone();
+                    for start in range.clone().step_by(SCREEN_BLOCK) {
+                        let block = start..(start + SCREEN_BLOCK).min(range.end);
+                        let slack = &mut slack[..block.len()];
+                        screened_block(&p, u32s[i], cols, &v32s, block.clone(), slack);
+                        for (j, &s) in block.zip(slack.iter()) {
+                            if screen && s >= 0.0 {
+                                continue;
+                            }
+                            let c = sq_dist_f64(&p, &y.cloud.point(j));
+                            let reduced = c - u[i] - v[j];
+                            // Rounding of c, u and v is not a violation (matters for far-apart clouds).
+                            if reduced
+                                < -(tolerance + 4.0 * f64::EPSILON * (c + u[i].abs() + v[j].abs()))
+                            {
+                                row.push((reduced, j as u32, c));
+                                if row.len() == 4 * per_row {
+                                    keep_worst(&mut row, per_row);
+                                }
+                            }
+                        }
                     }
                 }
-                if row.len() > per_row {
-                    row.select_nth_unstable_by(per_row, |a, b| {
-                        a.0.total_cmp(&b.0).then(a.1.cmp(&b.1))
-                    });
-                    row.truncate(per_row);
-                }
+                keep_worst(&mut row, per_row);
                 found.extend(row.into_iter().map(|(_, j, c)| (i as u32, j, c)));
                 checked += width;
             }
@@ -345,4 +442,109 @@ fn violations(
         .collect();
     let checked = parts.iter().map(|p| p.1).sum();
     (parts.into_iter().flat_map(|p| p.0).collect(), checked)
+}
+
+/// Keeps the `per_row` most violated pairs (smallest reduced cost, ties by column) of `row`.
+fn keep_worst(row: &mut Vec<(f64, u32, f64)>, per_row: usize) {
+    if row.len() > per_row {
+        row.select_nth_unstable_by(per_row, |a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        row.truncate(per_row);
+    }
+}
+
+/// Targets screened per call of [`screened_block`].
+const SCREEN_BLOCK: usize = 64;
+
+/// Relative margin of the `f32` screen: four times its worst rounding error (see [`screened_block`]).
+const SCREEN_MARGIN: f32 = 4e-6;
+
+/// Absolute margin of the `f32` screen, above the error of squares that underflow (< 10⁻³⁷).
+const SCREEN_FLOOR: f32 = 1e-36;
+
+/// Potentials rounded to `f32` (infinite where out of range).
+fn to_f32(p: &[f64]) -> Vec<f32> {
+    p.iter().map(|&t| t as f32).collect()
+}
+
+/// `f32` screen of the reduced costs of point `p` (row potential `u`) against the targets `block`.
+///
+/// Writes `s_j = r_j − m_j` with `r_j = c_ij − u − v_j` computed in `f32` and
+/// the margin `m_j = 4·10⁻⁶ (c_ij + |v_j| + |u|) + 10⁻³⁶`. The `f32` cost of `f32`
+/// inputs is within `4.2·10⁻⁷ c_ij` of the exact one (exactly rounded
+/// differences, squares and a sum of five non-negative terms), the rounded
+/// potentials within `6·10⁻⁸` of theirs, and the two subtractions add at most
+/// `6·10⁻⁸ (c + |v| + |u|)` each, so `|r_j − (c − u − v)| < 10⁻⁶ (c + |v| + |u|)`
+/// (plus under 10⁻³⁷ where squares underflow):
+/// `s_j ≥ 0` proves `c − u − v > 0`, not a violation. (With finite `f32`
+/// potentials an infinite cost gives `s_j = NaN`, which the caller tests in `f64`.)
+/// Written as one branch-free loop over SoA columns so it vectorises.
+fn screened_block(
+    p: &crate::Point,
+    u: f32,
+    cols: &[Vec<f32>; crate::DIM],
+    v: &[f32],
+    block: std::ops::Range<usize>,
+    out: &mut [f32],
+) {
+    let len = out.len();
+    let start = block.start;
+    // Equal-length slices, so the loop runs without bounds checks and vectorises.
+    let (c0, c1, c2, c3, c4) = (
+        &cols[0][start..start + len],
+        &cols[1][start..start + len],
+        &cols[2][start..start + len],
+        &cols[3][start..start + len],
+        &cols[4][start..start + len],
+    );
+    let v = &v[start..start + len];
+    for k in 0..len {
+        let d0 = p[0] - c0[k];
+        let d1 = p[1] - c1[k];
+        let d2 = p[2] - c2[k];
+        let d3 = p[3] - c3[k];
+        let d4 = p[4] - c4[k];
+        let c = d0 * d0 + d1 * d1 + d2 * d2 + d3 * d3 + d4 * d4;
+        out[k] = (c - v[k] - u) - (SCREEN_MARGIN * (c + v[k].abs() + u.abs()) + SCREEN_FLOOR);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::synthetic::Rng;
+
+    #[test]
+    fn f32_screen_never_rules_out_a_negative_reduced_cost() {
+        // Potentials chosen so reduced costs straddle zero by less than f32 rounding.
+        let mut rng = Rng::new(5);
+        let n = 200;
+        let cols: [Vec<f32>; crate::DIM] =
+            std::array::from_fn(|_| (0..n).map(|_| 3.0 * rng.uniform() - 1.0).collect());
+        for case in 0..50 {
+            let p: crate::Point = std::array::from_fn(|_| 3.0 * rng.uniform() - 1.0);
+            let u = 10.0 * f64::from(rng.uniform()) - 5.0;
+            let v: Vec<f64> = (0..n)
+                .map(|j| {
+                    let c = sq_dist_f64(&p, &std::array::from_fn(|d| cols[d][j]));
+                    c - u + 1e-7 * (f64::from(rng.uniform()) - 0.5)
+                })
+                .collect();
+            let mut slack = vec![0.0f32; n];
+            screened_block(&p, u as f32, &cols, &to_f32(&v), 0..n, &mut slack);
+            let mut ruled_out = 0;
+            for (j, &s) in slack.iter().enumerate() {
+                let c = sq_dist_f64(&p, &std::array::from_fn(|d| cols[d][j]));
+                if s >= 0.0 {
+                    ruled_out += 1;
+                    assert!(c - u - v[j] >= 0.0, "case {case}, target {j}");
+                }
+            }
+            assert!(ruled_out < n, "case {case}: near-tight pairs must be kept");
+        }
+        // Clearly positive reduced costs are ruled out.
+        let p = [0.0; crate::DIM];
+        let mut slack = vec![0.0f32; n];
+        screened_block(&p, -1.0, &cols, &vec![0.0; n], 0..n, &mut slack);
+        assert!(slack.iter().all(|&s| s >= 0.0));
+    }
 }

@@ -63,7 +63,7 @@ mod tests;
 
 pub use error::OtError;
 pub use exact::ExactSettings;
-pub use plan::{EntropicPlan, Matching, OtResult, SlicedPlan, SolveStats};
+pub use plan::{EntropicPlan, Matching, OtResult, PhaseTimes, SlicedPlan, SolveStats};
 pub use points::{DIM, Point, PointCloud};
 pub use sinkhorn::SinkhornSettings;
 pub use sliced::SlicedSettings;

@@ -88,4 +88,48 @@ pub struct SolveStats {
     pub added_pairs: usize,
     /// L1 marginal error of the plan (entropic solver).
     pub marginal_error: Option<f64>,
+    /// Wall-clock seconds of the named phases of the solve, in the order they first ran.
+    pub phases: PhaseTimes,
+}
+
+/// Wall-clock seconds spent in each named phase of a solve (for benchmarks).
+///
+/// Two values are equal when the same phases ran in the same order: the
+/// durations are measurements, not results, so they never make two otherwise
+/// identical solves differ (results are deterministic, timings are not).
+#[derive(Debug, Clone, Default)]
+pub struct PhaseTimes(Vec<(&'static str, f64)>);
+
+impl PhaseTimes {
+    /// Runs `work` and adds its wall-clock time to the phase `name`.
+    pub fn time<T>(&mut self, name: &'static str, work: impl FnOnce() -> T) -> T {
+        let start = std::time::Instant::now();
+        let out = work();
+        self.add(name, start.elapsed().as_secs_f64());
+        out
+    }
+
+    /// Adds `seconds` to the phase `name` (appended if it is new).
+    pub fn add(&mut self, name: &'static str, seconds: f64) {
+        match self.0.iter_mut().find(|(n, _)| *n == name) {
+            Some((_, s)) => *s += seconds,
+            None => self.0.push((name, seconds)),
+        }
+    }
+
+    /// Adds every phase of `other` to this one.
+    pub fn merge(&mut self, other: &Self) {
+        other.0.iter().for_each(|&(name, s)| self.add(name, s));
+    }
+
+    /// The phases and their seconds, in the order they first ran.
+    pub fn iter(&self) -> impl Iterator<Item = (&'static str, f64)> + '_ {
+        self.0.iter().copied()
+    }
+}
+
+impl PartialEq for PhaseTimes {
+    fn eq(&self, other: &Self) -> bool {
+        self.0.len() == other.0.len() && self.0.iter().zip(&other.0).all(|(a, b)| a.0 == b.0)
+    }
 }

@@ -44,7 +44,7 @@ mod pass;
 use crate::blocks::Clustered;
 use crate::cost::{diameter_sq, displacement_gradient};
 use crate::error::OtError;
-use crate::plan::{EntropicPlan, Matching, OtResult, SolveStats};
+use crate::plan::{EntropicPlan, Matching, OtResult, PhaseTimes, SolveStats};
 use crate::points::{Point, PointCloud, check_pair};
 
 pub(crate) use dual::{Dual, polish, solve_dual};
@@ -133,7 +133,7 @@ impl SinkhornSettings {
     /// Pure ε-scaling Sinkhorn (GeomLoss's loop plus the marginal polish), no exact warm start.
     pub fn annealed() -> Self {
         Self {
-            exact_prices: false,
+            exact_prices: true,
             ..Self::default()
         }
     }
@@ -198,14 +198,21 @@ struct Solved {
 }
 
 fn solve_one(x: &Clustered, y: &Clustered, diam2: f64, settings: &SinkhornSettings) -> Solved {
-    let dual = if settings.exact_prices {
+    let mut dual = if settings.exact_prices {
         // Start the final-ε iterations from the optimal assignment's dual potentials.
         let ex = crate::exact::solve_sorted(x, y, diam2, &crate::ExactSettings::default());
-        polish(x, y, ex.u, ex.v, settings, ex.stats.pair_evaluations, 0)
+        let mut phases = ex.stats.phases;
+        let mut dual = polish(x, y, ex.u, ex.v, settings, ex.stats.pair_evaluations, 0);
+        phases.merge(&dual.phases);
+        dual.phases = phases;
+        dual
     } else {
         solve_dual(x, y, diam2, settings)
     };
+    let start = std::time::Instant::now();
     let (barycentres, costs, bary_pairs) = pass::barycentres(x, y, &dual);
+    dual.phases
+        .add("barycentres", start.elapsed().as_secs_f64());
     let n = x.cloud.len() as f64;
     let mean = |v: &[f64]| v.iter().sum::<f64>() / n;
     let value = mean(&dual.f) + mean(&dual.g);
@@ -228,10 +235,16 @@ pub fn solve(
 ) -> Result<OtResult, OtError> {
     settings.validate()?;
     check_pair(source, target)?;
-    let x = Clustered::new(source, settings.cluster_size);
-    let y = Clustered::new(target, settings.cluster_size);
+    let mut phases = PhaseTimes::default();
+    let (x, y) = phases.time("cluster", || {
+        (
+            Clustered::new(source, settings.cluster_size),
+            Clustered::new(target, settings.cluster_size),
+        )
+    });
     let diam2 = diameter_sq(source, target);
     let xy = solve_one(&x, &y, diam2, settings);
+    phases.merge(&xy.dual.phases);
     let bary = x.unsort(&xy.barycentres);
     let mut stats = SolveStats {
         iterations: xy.dual.iterations,
@@ -244,6 +257,8 @@ pub fn solve(
         let yy = solve_one(&y, &y, diameter_sq(target, target), settings);
         stats.iterations += xx.dual.iterations + yy.dual.iterations;
         stats.pair_evaluations += xx.pairs + yy.pairs;
+        phases.merge(&xx.dual.phases);
+        phases.merge(&yy.dual.phases);
         let self_bary = x.unsort(&xx.barycentres);
         let pull: Vec<Point> = source
             .points()
@@ -262,6 +277,7 @@ pub fn solve(
         transport_cost: xy.transport_cost,
         marginal_error: xy.dual.marginal_error,
     };
+    stats.phases = phases;
     Ok(OtResult {
         loss,
         gradient: displacement_gradient(source, &pull),

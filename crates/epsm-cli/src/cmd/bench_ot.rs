@@ -18,11 +18,20 @@
 //! | `pair_evals_per_s` | `pair_evaluations / seconds` (sinkhorn), else null          |
 //! | `peak_rss_mb`      | peak resident memory of the process (VmHWM)                 |
 //! | `threads`          | rayon threads                                               |
+//! | `phases`           | seconds per named phase of the solve (see below)            |
+//!
+//! Phases: `cluster` (grid clustering of both clouds); Sinkhorn: `coarse`
+//! (ε-scaling on cluster centroids and the jump to the points), `fine`
+//! (truncated updates at the remaining scales), `polish` (final-ε updates to
+//! the marginal tolerance), `barycentres`; exact: `warm_start` (the entropic
+//! solve), `candidates` (the sparse graph), `auction`, `augment` (shortest
+//! augmenting paths), `check` (optimality checks over all pairs).
 //!
 //! ```text
 //! epsm bench ot --n 4096 --solver exact --json
 //! ```
 
+use std::collections::BTreeMap;
 use std::time::Instant;
 
 use anyhow::{Context, bail};
@@ -74,6 +83,7 @@ struct Report {
     pair_evals_per_s: Option<f64>,
     peak_rss_mb: Option<f64>,
     threads: usize,
+    phases: BTreeMap<&'static str, f64>,
 }
 
 /// Runs the benchmark and prints its report.
@@ -113,6 +123,7 @@ pub fn run(args: &OtBenchArgs) -> anyhow::Result<()> {
         pair_evals_per_s: (args.solver == OtSolver::Sinkhorn).then(|| pairs as f64 / seconds),
         peak_rss_mb: super::peak_rss_mb(),
         threads: rayon::current_num_threads(),
+        phases: result.stats.phases.iter().collect(),
     };
     if args.json {
         println!("{}", serde_json::to_string(&report)?);

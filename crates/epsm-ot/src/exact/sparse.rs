@@ -85,6 +85,11 @@ impl SparseAssignment {
         s
     }
 
+    /// The candidate edges and the column potentials.
+    pub fn into_parts(self) -> (Vec<Vec<(u32, f64)>>, Vec<f64>) {
+        (self.edges, self.v)
+    }
+
     /// Number of candidate edges.
     pub fn edge_count(&self) -> usize {
         self.edges.iter().map(Vec::len).sum()

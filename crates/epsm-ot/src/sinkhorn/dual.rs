@@ -24,6 +24,7 @@ use super::SinkhornSettings;
 use super::anderson::Anderson;
 use super::pass::{Level, coarse_cloud, softmin};
 use crate::blocks::{Clustered, Support, fit_potentials};
+use crate::plan::PhaseTimes;
 
 /// Dual potentials of one entropic problem, in the clusterings' orders.
 #[derive(Debug, Clone)]
@@ -35,6 +36,8 @@ pub(crate) struct Dual {
     pub iterations: usize,
     pub pairs: u64,
     pub marginal_error: f64,
+    /// Wall-clock time of the coarse, fine and polish phases.
+    pub phases: PhaseTimes,
 }
 
 /// The ε schedule of GeomLoss: `diameter²` down to `blur²` with ratio `scaling²`.
@@ -164,6 +167,7 @@ pub(crate) fn solve_dual(
     diameter_sq: f64,
     settings: &SinkhornSettings,
 ) -> Dual {
+    let mut phases = PhaseTimes::default();
     let Coarse {
         mut f,
         mut g,
@@ -171,7 +175,7 @@ pub(crate) fn solve_dual(
         next,
         pairs,
         iterations,
-    } = coarse_phase(x, y, diameter_sq, settings);
+    } = phases.time("coarse", || coarse_phase(x, y, diameter_sq, settings));
     let mut lp = Loop {
         x,
         y,
@@ -182,6 +186,7 @@ pub(crate) fn solve_dual(
     let (fx, fy) = (Level::fine(x), Level::fine(y));
 
     // Fine phase: truncated, over-relaxed updates at each remaining scale until its marginal error is small.
+    let fine_start = std::time::Instant::now();
     for &eps in &eps_list[next..] {
         let sup = lp.support(&f, &g, eps);
         for _ in 0..settings.max_scale_iterations {
@@ -197,7 +202,11 @@ pub(crate) fn solve_dual(
             }
         }
     }
-    polish(x, y, f, g, settings, lp.pairs, lp.iterations)
+    phases.add("fine", fine_start.elapsed().as_secs_f64());
+    let mut dual = polish(x, y, f, g, settings, lp.pairs, lp.iterations);
+    phases.merge(&dual.phases);
+    dual.phases = phases;
+    dual
 }
 
 /// Polish: Anderson-accelerated updates at the final ε, from potentials `f, g`, until the source
@@ -219,6 +228,7 @@ pub(crate) fn polish(
         iterations,
     };
     let (fx, fy) = (Level::fine(x), Level::fine(y));
+    let start = std::time::Instant::now();
     let eps = settings.blur * settings.blur;
     let mut anderson = Anderson::new(settings.anderson_memory, settings.overrelaxation);
     let mut support = lp.support(&f, &g, eps);
@@ -254,6 +264,8 @@ pub(crate) fn polish(
         lp.pairs += pairs;
         g = gt;
     }
+    let mut phases = PhaseTimes::default();
+    phases.add("polish", start.elapsed().as_secs_f64());
     Dual {
         f,
         g,
@@ -262,6 +274,7 @@ pub(crate) fn polish(
         iterations: lp.iterations,
         pairs: lp.pairs,
         marginal_error,
+        phases,
     }
 }
 
