@@ -131,9 +131,16 @@ impl SinkhornSettings {
     }
 
     /// Pure ε-scaling Sinkhorn (GeomLoss's loop plus the marginal polish), no exact warm start.
+    ///
+    /// Up to 300 updates per fine scale: the coarse-to-fine jump leaves a
+    /// slow large-scale error that 30 updates per scale do not remove, and
+    /// the polish alone then stalls above the marginal tolerance (n = 1024,
+    /// blur 0.03: L1 error 0.022 after the 5000 polish updates, against
+    /// ≤ 1e-3 after ~900 updates in all with 300 per scale).
     pub fn annealed() -> Self {
         Self {
-            exact_prices: true,
+            exact_prices: false,
+            max_scale_iterations: 300,
             ..Self::default()
         }
     }

@@ -18,6 +18,36 @@ fn solve(s: &PointCloud, t: &PointCloud, settings: &SinkhornSettings) -> OtResul
 }
 
 #[test]
+fn annealed_preset_runs_pure_eps_scaling_to_the_same_plan() {
+    let (s, t) = blobs_pair(1024, 4).unwrap_or_else(|| panic!("fixture"));
+    let blur = |settings: SinkhornSettings| SinkhornSettings {
+        blur: 0.03,
+        ..settings
+    };
+    let annealed = solve(&s, &t, &blur(SinkhornSettings::annealed()));
+    let phases: Vec<&str> = annealed.stats.phases.iter().map(|(name, _)| name).collect();
+    assert!(
+        phases.contains(&"coarse") && phases.contains(&"fine"),
+        "phases {phases:?}"
+    );
+    assert!(!phases.contains(&"auction"), "no exact solve: {phases:?}");
+    assert!(
+        plan(&annealed).marginal_error <= 1e-3,
+        "marginal error {} after {} iterations",
+        plan(&annealed).marginal_error,
+        annealed.stats.iterations
+    );
+    let warm = solve(&s, &t, &blur(SinkhornSettings::default()));
+    let rel = (annealed.loss - warm.loss).abs() / warm.loss;
+    assert!(
+        rel < 1e-3,
+        "annealed {} against warm-started {}",
+        annealed.loss,
+        warm.loss
+    );
+}
+
+#[test]
 fn marginals_are_within_tolerance() {
     let (s, t) = blobs_pair(1024, 4).unwrap_or_else(|| panic!("fixture"));
     let r = solve(
