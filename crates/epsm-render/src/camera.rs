@@ -92,15 +92,26 @@ impl Camera {
     }
 
     /// The primary ray through film position `film` (pixels, see the crate's
-    /// image-plane convention). The direction is unit.
+    /// image-plane convention). The direction is unit. Tracers making many
+    /// rays use [`Camera::film_rays`] once instead.
     #[inline]
     pub fn ray(&self, film: Vec2) -> Ray {
+        self.film_rays().ray(film)
+    }
+
+    /// The camera's `f32` ray generator (a snapshot: remake it after changing
+    /// the camera).
+    pub fn film_rays(&self) -> FilmRays {
         let th = self.tan_half() as f32;
-        let aspect = self.width as f32 / self.height as f32;
-        let sx = (2.0 * film.x / self.width as f32 - 1.0) * th * aspect;
-        let sy = (1.0 - 2.0 * film.y / self.height as f32) * th;
-        let dir = self.forward.as_vec3() + self.right.as_vec3() * sx + self.up.as_vec3() * sy;
-        Ray::new(self.origin.as_vec3(), dir.normalize())
+        FilmRays {
+            origin: self.origin.as_vec3(),
+            forward: self.forward.as_vec3(),
+            right: self.right.as_vec3(),
+            up: self.up.as_vec3(),
+            th,
+            th_aspect: th * (self.width as f32 / self.height as f32),
+            size: Vec2::new(self.width as f32, self.height as f32),
+        }
     }
 
     /// Projects a world point to film coordinates (pixels). Returns `None` for
@@ -134,6 +145,33 @@ impl Camera {
     #[inline]
     pub fn origin_f32(&self) -> Vec3 {
         self.origin.as_vec3()
+    }
+}
+
+/// Primary rays of a [`Camera`] in `f32`, with the per-camera constants
+/// (basis, `tan(fov_y/2)`, aspect) computed once.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FilmRays {
+    origin: Vec3,
+    forward: Vec3,
+    right: Vec3,
+    up: Vec3,
+    /// `tan(fov_y / 2)`.
+    th: f32,
+    /// `tan(fov_y / 2) · width / height`.
+    th_aspect: f32,
+    /// Image size in pixels.
+    size: Vec2,
+}
+
+impl FilmRays {
+    /// The primary ray through film position `film` (pixels); unit direction.
+    #[inline]
+    pub fn ray(&self, film: Vec2) -> Ray {
+        let sx = (2.0 * film.x / self.size.x - 1.0) * self.th_aspect;
+        let sy = (1.0 - 2.0 * film.y / self.size.y) * self.th;
+        let dir = self.forward + self.right * sx + self.up * sy;
+        Ray::new(self.origin, dir.normalize())
     }
 }
 

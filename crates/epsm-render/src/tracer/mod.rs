@@ -23,6 +23,7 @@ use path::{Recording, trace_path};
 #[cfg(target_arch = "x86_64")]
 use crate::bvh::Avx;
 use crate::bvh::{BoxTest, Portable};
+use crate::camera::FilmRays;
 use crate::film::Image;
 use crate::record::{PathRecord, RecordLevel};
 use crate::sampler::PixelKeys;
@@ -31,12 +32,6 @@ use crate::scene::Scene;
 /// Side of the square tiles rendered by one task.
 pub const TILE: u32 = 16;
 const DIMS_PER_BOUNCE: u32 = 8;
-/// From this many samples per pixel on, the tile loop hashes each pixel's
-/// dimensions once for all its samples ([`PixelKeys`]); below, hashing them
-/// as drawn is cheaper (a path draws only some of them).
-const KEYED_SPP: u32 = 4;
-/// At most this many dimensions are hashed up front per pixel.
-const KEYED_DIMS: u32 = 2 + DIMS_PER_BOUNCE * 64;
 /// Shadow rays stop this fraction short of the light point (relative, so it
 /// works at any scene scale).
 const SHADOW_EPS: f32 = 1e-4;
@@ -143,15 +138,17 @@ pub fn trace_samples(
     samples: &[PixelSample],
     level: RecordLevel,
 ) -> Vec<PathRecord> {
+    let film_rays = scene.camera().film_rays();
     samples
         .par_iter()
         .map(|s| {
             let mut counters = TraceCounters::default();
             let mut rec = PathRecord::default();
             let width = scene.camera().width;
-            let keys = PixelKeys::new(opts.seed, s.pixel.y * width + s.pixel.x, 0);
+            let keys = PixelKeys::new(opts.seed, s.pixel.y * width + s.pixel.x);
             trace_pixel_sample(
                 scene,
+                &film_rays,
                 opts,
                 &keys,
                 s.pixel,
@@ -269,24 +266,16 @@ fn render_tile_body(
     boxes: impl BoxTest,
 ) -> TileOutput {
     let (w, h) = (scene.camera().width, scene.camera().height);
+    let film_rays = scene.camera().film_rays();
     let mut out = TileOutput {
         pixels: Vec::new(),
         records: Vec::new(),
         counters: TraceCounters::default(),
     };
-    let keyed_dims = if opts.spp >= KEYED_SPP {
-        opts.max_depth
-            .saturating_mul(DIMS_PER_BOUNCE)
-            .saturating_add(2)
-            .min(KEYED_DIMS)
-    } else {
-        0
-    };
-    let mut keys = PixelKeys::default();
     for y in tile.y * TILE..((tile.y + 1) * TILE).min(h) {
         for x in tile.x * TILE..((tile.x + 1) * TILE).min(w) {
             let pixel = UVec2::new(x, y);
-            keys.set_pixel(opts.seed, y * w + x, keyed_dims);
+            let keys = PixelKeys::new(opts.seed, y * w + x);
             let mut sum = Vec3::ZERO;
             for s in 0..opts.spp {
                 let l = match level {
@@ -294,6 +283,7 @@ fn render_tile_body(
                         let mut rec = PathRecord::default();
                         let l = trace_pixel_sample(
                             scene,
+                            &film_rays,
                             opts,
                             &keys,
                             pixel,
@@ -307,6 +297,7 @@ fn render_tile_body(
                     }
                     None => trace_pixel_sample(
                         scene,
+                        &film_rays,
                         opts,
                         &keys,
                         pixel,
@@ -324,12 +315,14 @@ fn render_tile_body(
     out
 }
 
-/// Traces one pixel sample (the pixel's `keys`, box tests by `boxes`);
+/// Traces one pixel sample (primary rays by `film_rays`, the pixel's `keys`,
+/// box tests by `boxes`);
 /// returns its radiance (zero, and counted, when it was not finite).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn trace_pixel_sample(
     scene: &Scene,
+    film_rays: &FilmRays,
     opts: &RenderOptions,
     keys: &PixelKeys,
     pixel: UVec2,
@@ -338,10 +331,9 @@ fn trace_pixel_sample(
     counters: &mut TraceCounters,
     boxes: impl BoxTest,
 ) -> Vec3 {
-    let cam = scene.camera();
     let mut sampler = keys.sampler(sample, opts.spp);
     let film = pixel.as_vec2() + sampler.next_2d();
-    let ray = cam.ray(film);
+    let ray = film_rays.ray(film);
     let mut rec = record.map(|(level, rec)| {
         *rec = PathRecord {
             pixel,
