@@ -116,6 +116,7 @@ pub struct BsdfSample {
 
 impl Material {
     /// The kind of manifold vertex this material makes.
+    #[inline(always)]
     pub fn vertex_kind(&self) -> VertexKind {
         match self.bsdf {
             Bsdf::Diffuse(_) => VertexKind::Diffuse,
@@ -125,6 +126,7 @@ impl Material {
     }
 
     /// Whether every lobe is a delta (no next-event estimation possible).
+    #[inline(always)]
     pub fn is_delta(&self) -> bool {
         self.vertex_kind() == VertexKind::Specular
     }
@@ -138,6 +140,7 @@ impl Material {
     /// so for reflection `m = normalize(wi + wo)` lies on the side of `wi`
     /// (`−z` for the smooth conductor and diffuse seen from the back).
     /// Dielectrics have an inside and are never mirrored (`m = +z` always).
+    #[inline(always)]
     pub fn sample(&self, wi: Vec3, uv: Vec2, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
         let side = match &self.bsdf {
             Bsdf::Dielectric(d) => return d.sample(wi, u_lobe),
@@ -160,6 +163,7 @@ impl Material {
     /// `f(wi, wo)·|cos θo|` for the non-delta lobes (local directions); zero
     /// for delta lobes, for directions in opposite hemispheres and for the
     /// back face of one-sided materials.
+    #[inline(always)]
     pub fn eval(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> Vec3 {
         let Some(side) = self.side(wi) else {
             return Vec3::ZERO;
@@ -175,6 +179,7 @@ impl Material {
     /// Solid-angle pdf with which `sample` returns `wo` through a non-delta
     /// lobe (zero where `eval` is zero by construction, and for delta lobes).
     /// No current lobe's pdf depends on the texture coordinates `_uv`.
+    #[inline(always)]
     pub fn pdf(&self, wi: Vec3, wo: Vec3, _uv: Vec2) -> f32 {
         let Some(side) = self.side(wi) else {
             return 0.0;
@@ -188,6 +193,7 @@ impl Material {
     }
 
     /// Which side `wi` sees: `None` for the back of a one-sided material.
+    #[inline(always)]
     fn side(&self, wi: Vec3) -> Option<Side> {
         if wi.z > 0.0 {
             Some(Side::Front)
