@@ -33,6 +33,9 @@ pub struct Hit {
     pub b2: f32,
     /// Ray parameter of the hit (distance in units of the ray's `dir`).
     pub t: f32,
+    /// Index of the triangle in the static BVH's shading table, or
+    /// `u32::MAX` for a hit on an instance.
+    pub(crate) world_index: u32,
 }
 
 /// A shading point in world space.
@@ -120,12 +123,19 @@ pub(crate) fn surface_point(
         }
         ns
     };
-    let uv = if mesh.uvs.is_empty() {
-        Vec2::new(b1, b2)
-    } else {
-        b0 * mesh.uvs[i0] + b1 * mesh.uvs[i1] + b2 * mesh.uvs[i2]
-    };
+    let uv = texture_uv(mesh, triangle, b1, b2);
     SurfacePoint { p, ng, ns, uv }
+}
+
+/// The texture coordinates of `triangle` of `mesh` at `(b1, b2)`: the
+/// interpolated `uvs`, or `(b1, b2)` without them.
+#[inline(always)]
+pub(crate) fn texture_uv(mesh: &Mesh, triangle: u32, b1: f32, b2: f32) -> Vec2 {
+    if mesh.uvs.is_empty() {
+        return Vec2::new(b1, b2);
+    }
+    let [i0, i1, i2] = mesh.indices[triangle as usize].map(|i| i as usize);
+    (1.0 - b1 - b2) * mesh.uvs[i0] + b1 * mesh.uvs[i1] + b2 * mesh.uvs[i2]
 }
 
 /// `normalize(e1 × e2)` in `f32`, or in `f64` when the cross product

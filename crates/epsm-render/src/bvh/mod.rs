@@ -26,6 +26,7 @@
 
 mod blas;
 mod node;
+mod shading;
 mod tlas;
 mod triangle;
 mod walk;
@@ -36,7 +37,7 @@ use std::fmt;
 use std::sync::Arc;
 use std::time::Instant;
 
-use glam::{DVec3, Vec3A};
+use glam::{DVec3, Vec2, Vec3A};
 use obvhs::aabb::Aabb;
 
 use crate::hit::{self, Hit, SurfacePoint};
@@ -54,6 +55,9 @@ use world::WorldBlas;
 
 /// Marks an object without an instance.
 const NO_INSTANCE: u32 = u32::MAX;
+
+/// [`Hit::world_index`] of a hit on an instance.
+const NO_WORLD_INDEX: u32 = u32::MAX;
 
 /// Copies of a shared mesh with more triangles than this stay instanced
 /// (merging them would copy the mesh once per object).
@@ -356,10 +360,28 @@ impl Accel {
         hit(found, best, world.t_max)
     }
 
-    /// The shading point of `hit` (unit normals, world space), from the
-    /// cached `f32` transform of the hit object.
+    /// The shading point of `hit` (unit normals, world space): from the
+    /// static BVH's shading table for static geometry, else from the cached
+    /// `f32` transform of the hit object.
     #[inline(always)]
     pub fn surface_point(&self, objects: &[Object], hit: &Hit) -> SurfacePoint {
+        if let Some(tri) = self
+            .world
+            .as_deref()
+            .and_then(|w| w.shading(hit.world_index))
+        {
+            let uv = if tri.textured {
+                hit::texture_uv(
+                    &objects[hit.object as usize].mesh,
+                    hit.triangle,
+                    hit.b1,
+                    hit.b2,
+                )
+            } else {
+                Vec2::new(hit.b1, hit.b2)
+            };
+            return tri.point(hit.b1, hit.b2, uv);
+        }
         let object = &objects[hit.object as usize];
         let cached = self
             .instance_of_object
@@ -391,13 +413,13 @@ impl Accel {
 /// The [`Hit`] of bottom-level hit `best` in `found` at `t`.
 #[inline(always)]
 fn hit(found: Found<'_>, best: SlotHit, t: f32) -> Option<Hit> {
-    let (object, triangle) = match found {
+    let (object, triangle, world_index) = match found {
         Found::Nothing => return None,
         Found::World(world) => {
-            let source = world.source(best.slot);
-            (source.object, source.triangle)
+            let (source, index) = world.source(best.slot);
+            (source.object, source.triangle, index)
         }
-        Found::Instance(object, blas) => (object, blas.id(best.slot)),
+        Found::Instance(object, blas) => (object, blas.id(best.slot), NO_WORLD_INDEX),
     };
     Some(Hit {
         object,
@@ -405,6 +427,7 @@ fn hit(found: Found<'_>, best: SlotHit, t: f32) -> Option<Hit> {
         b1: best.b1,
         b2: best.b2,
         t,
+        world_index,
     })
 }
 

@@ -8,7 +8,9 @@
 //! it is degenerate in object space or in world space, or when its object's
 //! transform is singular. Barycentrics are invariant under affine maps, so a
 //! hit reports the same `(b1, b2)` (to rounding) as an instance would, and
-//! `t` is in units of the world ray's direction as for instances.
+//! `t` is in units of the world ray's direction as for instances. Each
+//! triangle's world-space shading data (module `shading`) is kept beside it,
+//! so a static hit's shading point needs no transform.
 //!
 //! Built with obvhs `fast_build` (PLOC with a wider search and more
 //! reinsertion than the per-mesh `very_fast_build`): large and small
@@ -19,10 +21,11 @@
 //!
 //! No parameters.
 
-use glam::Vec3A;
+use glam::{DMat3, Vec3A};
 use obvhs::BvhBuildParams;
 
 use super::blas::Blas;
+use super::shading::ShadingTriangle;
 use super::triangle::PackedTriangle;
 use crate::scene::{Object, ObjectId};
 
@@ -42,6 +45,8 @@ pub(crate) struct WorldBlas {
     pub blas: Blas,
     /// The source of each input triangle.
     refs: Vec<TriangleRef>,
+    /// The shading data of each input triangle (same indices as `refs`).
+    shading: Vec<ShadingTriangle>,
     /// Input triangles left out (degenerate or singular placement).
     pub left_out: usize,
 }
@@ -51,26 +56,27 @@ impl WorldBlas {
     /// none of them has a hittable triangle.
     pub fn build(objects: &[Object], members: &[ObjectId]) -> Option<Self> {
         let mut refs = Vec::new();
+        let mut shading = Vec::new();
         let mut world = Vec::new();
         let mut inputs = 0;
         for &id in members {
             let object = &objects[id as usize];
             let mesh = &object.mesh;
+            let normal_from_object: DMat3 = object.world_from_object.matrix3.inverse().transpose();
             inputs += mesh.len();
             for triangle in 0..mesh.len() as u32 {
                 let local = mesh.triangle(triangle);
                 if PackedTriangle::new(local.map(Vec3A::from)).is_none() {
                     continue;
                 }
-                let placed = local.map(|p| {
-                    Vec3A::from(
-                        object
-                            .world_from_object
-                            .transform_point3(p.as_dvec3())
-                            .as_vec3(),
-                    )
-                });
-                world.push((refs.len() as u32, placed));
+                let placed = local.map(|p| object.world_from_object.transform_point3(p.as_dvec3()));
+                world.push((refs.len() as u32, placed.map(|p| Vec3A::from(p.as_vec3()))));
+                shading.push(ShadingTriangle::new(
+                    object,
+                    &normal_from_object,
+                    triangle,
+                    placed,
+                ));
                 refs.push(TriangleRef {
                     object: id,
                     triangle,
@@ -82,18 +88,29 @@ impl WorldBlas {
         Some(Self {
             blas,
             refs,
+            shading,
             left_out,
         })
     }
 
-    /// The source of the triangle in leaf slot `slot`.
+    /// The source of the triangle in leaf slot `slot` and its index in the
+    /// shading table.
     #[inline(always)]
-    pub fn source(&self, slot: u32) -> TriangleRef {
-        self.refs[self.blas.id(slot) as usize]
+    pub fn source(&self, slot: u32) -> (TriangleRef, u32) {
+        let index = self.blas.id(slot);
+        (self.refs[index as usize], index)
+    }
+
+    /// The shading data of the triangle with table index `index`.
+    #[inline(always)]
+    pub fn shading(&self, index: u32) -> Option<&ShadingTriangle> {
+        self.shading.get(index as usize)
     }
 
     /// Approximate heap size in bytes.
     pub fn bytes(&self) -> usize {
-        self.blas.bytes() + self.refs.len() * size_of::<TriangleRef>()
+        self.blas.bytes()
+            + self.refs.len() * size_of::<TriangleRef>()
+            + self.shading.len() * size_of::<ShadingTriangle>()
     }
 }
