@@ -73,7 +73,9 @@ pub(super) fn trace_path(
         let sp = scene.accel().surface_point(objects, &hit);
         let object = &objects[hit.object as usize];
         let material = &scene.materials()[object.material as usize];
-        let wi_world = -ray.dir.normalize();
+        // Camera and continuation rays are unit (sampled directions mapped by
+        // an orthonormal frame): no renormalisation.
+        let wi_world = -ray.dir;
         let mut contribution = Vec3::ZERO;
 
         // Emission hit by BSDF sampling (front face only).
