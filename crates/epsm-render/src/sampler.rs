@@ -194,7 +194,10 @@ fn permute(mut i: u32, l: u32, p: u32) -> u32 {
             break;
         }
     }
-    (i.wrapping_add(p)) % l
+    // `% l` is a division; for a power of two `l` (then `w = l − 1`) the
+    // mask gives the same value.
+    let i = i.wrapping_add(p);
+    if w == l - 1 { i & w } else { i % l }
 }
 
 #[cfg(test)]

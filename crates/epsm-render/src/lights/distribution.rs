@@ -34,6 +34,9 @@ pub struct Distribution1D {
     cdf: Vec<f64>,
     /// Sum of the weights.
     total: f64,
+    /// The only entry of non-zero weight, when there is exactly one (a scene
+    /// with one light): sampling then needs no search.
+    single: Option<usize>,
 }
 
 impl Distribution1D {
@@ -57,10 +60,16 @@ impl Distribution1D {
         for c in &mut cdf {
             *c /= acc;
         }
+        let mut nonzero = func.iter().enumerate().filter(|(_, w)| **w > 0.0);
+        let single = match (nonzero.next(), nonzero.next()) {
+            (Some((index, _)), None) => Some(index),
+            _ => None,
+        };
         Some(Self {
             func,
             cdf,
             total: acc,
+            single,
         })
     }
 
@@ -90,6 +99,15 @@ impl Distribution1D {
         // The entry i with cdf[i] ≤ u < cdf[i + 1]; zero-weight entries have an
         // empty interval and are skipped.
         let u = u.clamp(0.0, 1.0);
+        if let Some(index) = self.single {
+            // What the search below gives: cdf = 0 up to the entry and 1 from
+            // it on (w / w is exact), so pmf 1 and u unchanged.
+            return DiscreteSample {
+                index,
+                pmf: 1.0,
+                u_remapped: u.min(1.0 - f64::EPSILON),
+            };
+        }
         let upper = if self.cdf.len() <= LINEAR_SEARCH_MAX {
             // The same index as the binary search, without its unpredictable
             // branches (light and triangle selection over a few entries).
