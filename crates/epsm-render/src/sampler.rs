@@ -15,15 +15,16 @@
 //! permutation; later dimensions are independent hashed numbers, several
 //! times cheaper.
 //!
-//! Cost: the stratified dimensions start from a hash of `(seed, pixel,
-//! dimension)` that does not depend on the sample; [`PixelKeys`] computes
-//! those once per pixel for all its samples. Every later number is one
-//! multiply–xorshift of a Weyl step `k + (d + 1)·φ` from a per-sample key
-//! `k` (one 64-bit finaliser of `(seed, pixel, sample)`, computed when the
-//! sample's stream is made), so a path's ~50 numbers cost one strong hash
-//! plus a handful of instructions each. The streams stay counter-based:
-//! every number is still a pure function of `(seed, pixel, sample,
-//! dimension)`.
+//! Cost: the permutation of each stratified dimension is chosen by a hash of
+//! `(seed, pixel, dimension)` that does not depend on the sample;
+//! [`PixelKeys`] computes those once per pixel for all its samples. Every
+//! other bit of randomness (the stratified jitters and all later numbers) is
+//! one multiply–xorshift of a Weyl step `k + (d + 1)·φ` from a per-sample
+//! key `k` (one 64-bit finaliser of `(seed, pixel, sample)`, computed when
+//! the sample's stream is made), so a path's ~50 numbers cost one strong
+//! hash plus a handful of instructions each. The streams stay
+//! counter-based: every number is still a pure function of `(seed, pixel,
+//! sample, dimension)`.
 
 use glam::Vec2;
 
@@ -32,7 +33,7 @@ use glam::Vec2;
 #[derive(Clone, Copy, Debug, Default)]
 pub struct PixelKeys {
     key: u64,
-    strata: [u64; STRATIFIED_DIMENSIONS as usize],
+    strata: [u32; STRATIFIED_DIMENSIONS as usize],
 }
 
 impl PixelKeys {
@@ -43,7 +44,7 @@ impl PixelKeys {
         let key = pixel_key(seed, pixel);
         let mut strata = [0; STRATIFIED_DIMENSIONS as usize];
         for (d, h) in (0..).zip(&mut strata) {
-            *h = dim_hash(key, d);
+            *h = dim_hash(key, d) as u32;
         }
         Self { key, strata }
     }
@@ -65,7 +66,7 @@ impl PixelKeys {
 #[derive(Clone, Copy, Debug)]
 pub struct PixelSampler<'a> {
     /// The pixel's hashes of the stratified dimensions ([`PixelKeys`]).
-    strata: &'a [u64; STRATIFIED_DIMENSIONS as usize],
+    strata: &'a [u32; STRATIFIED_DIMENSIONS as usize],
     /// The per-sample key of the dimensions past the stratified ones.
     sample_key: u64,
     sample: u32,
@@ -89,9 +90,8 @@ impl PixelSampler<'_> {
         let Some(&h) = self.strata.get(dim as usize) else {
             return to_unit(weyl_mix(self.sample_key, dim));
         };
-        let stratum = permute(self.sample, self.spp, h as u32);
-        let jitter =
-            to_unit((h >> 32) as u32 ^ hash32(self.sample.wrapping_mul(0x2C1B_3C6D) ^ h as u32));
+        let stratum = permute(self.sample, self.spp, h);
+        let jitter = to_unit(weyl_mix(self.sample_key, dim));
         ((stratum as f32 + jitter) / self.spp as f32).min(ONE_MINUS_EPSILON)
     }
 
@@ -119,7 +119,8 @@ fn pixel_key(seed: u32, pixel: u32) -> u64 {
     mix64(((seed as u64) << 32) | pixel as u64)
 }
 
-/// The sample-independent hash of dimension `dim` of the pixel with `key`.
+/// The sample-independent hash of dimension `dim` of the pixel with `key`
+/// (its low half chooses the dimension's permutation).
 #[inline]
 fn dim_hash(key: u64, dim: u32) -> u64 {
     mix64(key ^ u64::from(dim).wrapping_mul(GOLDEN))
@@ -146,16 +147,6 @@ fn mix64(mut z: u64) -> u64 {
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
     z ^ (z >> 31)
-}
-
-/// A 32-bit integer hash (Wellons' lowbias32).
-#[inline]
-fn hash32(mut x: u32) -> u32 {
-    x ^= x >> 16;
-    x = x.wrapping_mul(0x7FEB_352D);
-    x ^= x >> 15;
-    x = x.wrapping_mul(0x846C_A68B);
-    x ^ (x >> 16)
 }
 
 /// Element `i` of a pseudo-random permutation of `0..l` chosen by `p`

@@ -54,7 +54,8 @@ pub(super) fn trace_path(
     let mut prev: Option<(Vec3, f32)> = None;
 
     for depth in 0..opts.max_depth {
-        sampler.set_dimension(2 + depth * DIMS_PER_BOUNCE);
+        let dims = 2 + depth * DIMS_PER_BOUNCE;
+        sampler.set_dimension(dims);
         counters.rays += 1;
 
         // Find the next vertex; rays that leave see the background.
@@ -112,7 +113,9 @@ pub(super) fn trace_path(
         let connection = nee.connection;
         radiance += contribution;
 
-        // Sample the BSDF to continue.
+        // Sample the BSDF to continue (dimensions 3–5 of the bounce's block,
+        // whether or not next-event estimation drew its three).
+        sampler.set_dimension(dims + 3);
         let u_lobe = sampler.next_1d();
         let u_dir = sampler.next_2d();
         let sample = material.sample(wi, sp.uv, u_lobe, u_dir);
@@ -207,7 +210,7 @@ struct NextEvent {
 
 /// Samples a light, evaluates the BSDF toward it, MIS-weights against BSDF
 /// sampling and traces the shadow ray (box tests by `boxes`). Consumes three
-/// random numbers.
+/// random numbers, none at a delta vertex.
 #[inline(always)]
 fn next_event(
     scene: &Scene,
@@ -222,11 +225,11 @@ fn next_event(
         contribution: Vec3::ZERO,
         connection: None,
     };
-    let u_select = sampler.next_1d();
-    let u_light = sampler.next_2d();
     if at.material.is_delta() {
         return out;
     }
+    let u_select = sampler.next_1d();
+    let u_light = sampler.next_2d();
     let Some(ls) = scene.lights().sample(at.sp.p, u_select, u_light) else {
         return out;
     };
