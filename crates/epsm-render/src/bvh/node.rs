@@ -72,10 +72,7 @@ impl TraceRay {
         let safe = Vec3A::select(dir.abs().cmpge(Vec3A::splat(TINY_DIR)), dir, tiny);
         let bits = neg.bitmask();
         let near = [bits & 1, (bits >> 1) & 1, (bits >> 2) & 1].map(|b| b as usize);
-        let pos = !bits & 7;
-        let oct_inv4 = ((pos & 1) * 0x0404_0404)
-            | (((pos >> 1) & 1) * 0x0202_0202)
-            | ((pos >> 2) * 0x0101_0101);
+        let oct_inv4 = OCT_INV4[(!bits & 7) as usize];
         Self {
             origin,
             dir,
@@ -88,6 +85,20 @@ impl TraceRay {
         }
     }
 }
+
+/// obvhs's `ray_get_octant_inv4` by the mask of positive direction
+/// components (bit `a` for axis `a`): axis x weighs 4, y 2, z 1, repeated in
+/// each byte.
+const OCT_INV4: [u32; 8] = {
+    let mut table = [0; 8];
+    let mut pos = 0;
+    while pos < 8 {
+        table[pos] =
+            ((pos as u32 & 1) * 4 + ((pos as u32 >> 1) & 1) * 2 + (pos as u32 >> 2)) * 0x0101_0101;
+        pos += 1;
+    }
+    table
+};
 
 /// A CWBVH node with its eight child boxes decompressed to `f32` planes
 /// (rounded outwards by one ULP), so the slab test converts no bytes; empty

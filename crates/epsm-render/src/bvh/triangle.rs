@@ -44,32 +44,43 @@ impl RayShear {
         let y_ge_z = a.y >= a.z;
         let kz = usize::from(!x_largest) + usize::from(!x_largest & !y_ge_z);
         let dz = dir.to_array()[kz];
-        let [ex, ey] = AXES_ACROSS[2 * kz + usize::from(dz < 0.0)];
-        let ez = Vec3A::AXES[kz];
+        let case = 2 * kz + usize::from(dz < 0.0);
         let sz = 1.0 / dz;
-        // `dir·e` is `dir[k]` exactly (or a zero, whose sign the rows lose).
-        let rows = Mat3A::from_cols(
-            ex - dir.dot(ex) * sz * ez,
-            ey - dir.dot(ey) * sz * ez,
-            sz * ez,
-        );
-        Self {
-            m: rows.transpose(),
-        }
+        // Column kz of the shear is (−Sx, −Sy, Sz) with `S = dir[k]·sz` (as
+        // the paper rounds it); the others are the unit axes `BASE` places.
+        // Adding it to the zero column kz through a 0/1 weight is exact.
+        let [kx, ky] = AXES_ACROSS[case];
+        let d = dir.to_array();
+        let kz_col = Vec3A::new(-(d[kx] * sz), -(d[ky] * sz), sz);
+        let mut m = BASE[case];
+        let at_kz = Vec3A::AXES[kz];
+        m.x_axis += kz_col * at_kz.x;
+        m.y_axis += kz_col * at_kz.y;
+        m.z_axis += kz_col * at_kz.z;
+        Self { m }
     }
 }
 
-/// The unit axes `[e_kx, e_ky]` across the ray for largest axis `kz` (row
-/// `2·kz`), swapped when the direction along `kz` is negative (row
-/// `2·kz + 1`) to keep the winding.
-const AXES_ACROSS: [[Vec3A; 2]; 6] = [
-    [Vec3A::Y, Vec3A::Z],
-    [Vec3A::Z, Vec3A::Y],
-    [Vec3A::Z, Vec3A::X],
-    [Vec3A::X, Vec3A::Z],
-    [Vec3A::X, Vec3A::Y],
-    [Vec3A::Y, Vec3A::X],
-];
+/// The axes `[kx, ky]` across the ray for largest axis `kz` (row `2·kz`),
+/// swapped when the direction along `kz` is negative (row `2·kz + 1`) to
+/// keep the winding.
+const AXES_ACROSS: [[usize; 2]; 6] = [[1, 2], [2, 1], [2, 0], [0, 2], [0, 1], [1, 0]];
+
+/// The shear of each row of [`AXES_ACROSS`] without its `kz` column: column
+/// `kx` is `+x` (the sheared x takes `v[kx]`), column `ky` is `+y`, column
+/// `kz` zero.
+const BASE: [Mat3A; 6] = {
+    let mut table = [Mat3A::ZERO; 6];
+    let mut case = 0;
+    while case < 6 {
+        let mut cols = [[0.0f32; 3]; 3];
+        cols[AXES_ACROSS[case][0]][0] = 1.0;
+        cols[AXES_ACROSS[case][1]][1] = 1.0;
+        table[case] = Mat3A::from_cols_array_2d(&cols);
+        case += 1;
+    }
+    table
+};
 
 /// One triangle's vertices, object space.
 #[derive(Clone, Copy, Debug, PartialEq)]
