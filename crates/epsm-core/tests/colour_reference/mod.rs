@@ -27,7 +27,7 @@ fov = 50.0
 resolution = [20, 20]
 
 [render]
-spp = 2
+spp = 4
 max_depth = 4
 
 [background]
