@@ -34,7 +34,8 @@ pub struct Hit {
     /// Ray parameter of the hit (distance in units of the ray's `dir`).
     pub t: f32,
     /// Index of the triangle in the static BVH's shading table, or
-    /// `u32::MAX` for a hit on an instance.
+    /// `u32::MAX` for a hit on an instance (checked against `object` and
+    /// `triangle` before use, so a stale index only costs the slower path).
     pub(crate) world_index: u32,
 }
 

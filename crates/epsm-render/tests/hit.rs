@@ -163,3 +163,37 @@ fn accel_surface_point_matches_f64_side() {
         "{sp:?} vs {exact:?}"
     );
 }
+
+/// Static objects shade from the static BVH's table, instances from their
+/// cached placement: the same hits give the same shading points either way,
+/// also for hits kept across the rebuild that made half the objects dynamic
+/// (their table indices are stale then and must not be used).
+#[test]
+fn static_table_and_instance_placement_agree() {
+    let mut rng = Rng::new(11);
+    let objects = random_scene(&mut rng);
+    let statics = Accel::build(&objects);
+    let mut mixed = statics.clone();
+    let even: Vec<u32> = (0..objects.len() as u32).step_by(2).collect();
+    mixed.update_instances(&objects, &even);
+    let (lo, hi) = statics.world_bounds().expect("geometry");
+    let mut checked = 0;
+    for _ in 0..3000 {
+        let origin = lo + (hi - lo) * rng.dvec3(0.0, 1.0);
+        let ray = Ray::new(origin.as_vec3(), rng.unit().as_vec3());
+        let Some(hit) = statics.closest_hit(&ray) else {
+            continue;
+        };
+        let a = statics.surface_point(&objects, &hit);
+        let b = mixed.surface_point(&objects, &hit);
+        assert!(
+            a.p.distance(b.p) < 1e-4 * (1.0 + hit.t)
+                && a.ng.distance(b.ng) < 1e-4
+                && a.ns.distance(b.ns) < 1e-4
+                && a.uv.distance(b.uv) < 1e-5,
+            "{a:?} vs {b:?}"
+        );
+        checked += 1;
+    }
+    assert!(checked > 500, "{checked} hits");
+}

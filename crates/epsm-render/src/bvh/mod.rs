@@ -368,7 +368,7 @@ impl Accel {
         if let Some(tri) = self
             .world
             .as_deref()
-            .and_then(|w| w.shading(hit.world_index))
+            .and_then(|w| w.shading(hit.world_index, hit.object, hit.triangle))
         {
             let uv = if tri.textured {
                 hit::texture_uv(

@@ -101,10 +101,15 @@ impl WorldBlas {
         (self.refs[index as usize], index)
     }
 
-    /// The shading data of the triangle with table index `index`.
+    /// The shading data of the triangle with table index `index`, if that
+    /// entry is `triangle` of `object` (a hit from before a rebuild, or from
+    /// another BVH, finds nothing).
     #[inline(always)]
-    pub fn shading(&self, index: u32) -> Option<&ShadingTriangle> {
-        self.shading.get(index as usize)
+    pub fn shading(&self, index: u32, object: ObjectId, triangle: u32) -> Option<&ShadingTriangle> {
+        let source = self.refs.get(index as usize)?;
+        (source.object == object && source.triangle == triangle)
+            .then(|| self.shading.get(index as usize))
+            .flatten()
     }
 
     /// Approximate heap size in bytes.
