@@ -83,7 +83,7 @@ impl PixelSampler<'_> {
     }
 
     /// The next number in `[0, 1)`.
-    #[inline]
+    #[inline(always)]
     pub fn next_1d(&mut self) -> f32 {
         let dim = self.dim;
         self.dim += 1;

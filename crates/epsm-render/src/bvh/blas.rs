@@ -1,7 +1,8 @@
-//! Bottom level: a compressed wide BVH (CWBVH, obvhs) over triangles (one
-//! per instanced mesh in object space, and one over the static objects in
-//! world space), with the triangles packed for intersection and reordered by
-//! the BVH's `primitive_indices` so a leaf slot indexes them directly.
+//! Bottom level: a compressed wide BVH (CWBVH) built by obvhs over triangles
+//! (one per instanced mesh in object space, and one over the static objects
+//! in world space), with the triangles reordered by the BVH's
+//! `primitive_indices` so a leaf slot indexes them directly, then converted
+//! to the traversal layout of module `flat`.
 //!
 //! Model: PLOC build with light reinsertion, collapsed to an 8-wide BVH with
 //! at most three triangles per leaf (obvhs `BvhBuildParams::very_fast_build`).
@@ -24,49 +25,32 @@ use std::time::Duration;
 use glam::Vec3A;
 use obvhs::BvhBuildParams;
 use obvhs::aabb::Aabb;
+use obvhs::cwbvh::CwBvh;
 use obvhs::cwbvh::builder::build_cwbvh_from_tris;
 use obvhs::triangle::Triangle;
 
-use super::node::{BoxTest, TraceRay, WideBvh};
+use super::flat::{FlatBvh, FlatHit};
+use super::node::{BoxTest, TraceRay};
 use super::triangle::PackedTriangle;
-use super::walk::walk;
 use crate::scene::Mesh;
 
-/// The closest hit found so far in one bottom-level BVH.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub(crate) struct SlotHit {
-    /// Leaf slot of the triangle (index into the packed triangles).
-    pub slot: u32,
-    /// Barycentric `b1`.
-    pub b1: f32,
-    /// Barycentric `b2`.
-    pub b2: f32,
-}
-
-/// A BVH over packed triangles, each tagged with a caller-chosen id.
-#[derive(Clone, Debug)]
-pub(crate) struct Blas {
-    bvh: WideBvh,
-    triangles: Vec<PackedTriangle>,
-    ids: Vec<u32>,
-    /// Bounds of the hittable triangles.
+/// An obvhs CWBVH over packed triangles, the triangles and their ids in leaf
+/// slot order (reordered by the BVH's `primitive_indices`).
+pub(crate) struct SlotTriangles {
+    /// The BVH; leaf slots index `triangles` and `ids`.
+    pub bvh: CwBvh,
+    /// The triangles by slot.
+    pub triangles: Vec<PackedTriangle>,
+    /// The caller's id of each slot's triangle.
+    pub ids: Vec<u32>,
+    /// Bounds of the triangles.
     pub bounds: Aabb,
 }
 
-impl Blas {
-    /// Builds the object-space BVH of `mesh` (obvhs `very_fast_build`),
-    /// ids = the mesh's triangle indices; `None` when it has no hittable
-    /// triangle.
-    pub fn build(mesh: &Mesh) -> Option<Self> {
-        Self::from_triangles(
-            (0..mesh.len() as u32).map(|tri| (tri, mesh.triangle(tri).map(Vec3A::from))),
-            BvhBuildParams::very_fast_build(),
-        )
-    }
-
+impl SlotTriangles {
     /// Builds the BVH of `(id, vertices)` triangles with `params`, leaving
     /// out those [`PackedTriangle::new`] rejects; `None` when none is left.
-    pub fn from_triangles(
+    pub fn build(
         triangles: impl Iterator<Item = (u32, [Vec3A; 3])>,
         params: BvhBuildParams,
     ) -> Option<Self> {
@@ -84,18 +68,9 @@ impl Blas {
             return None;
         }
         let bvh = build_cwbvh_from_tris(&tris, params, &mut Duration::default());
-        let triangles: Vec<PackedTriangle> = bvh
-            .primitive_indices
-            .iter()
-            .map(|&i| packed[i as usize])
-            .collect();
-        let ids = bvh
-            .primitive_indices
-            .iter()
-            .map(|&i| ids[i as usize])
-            .collect();
+        let by_slot = |i: &u32| (packed[*i as usize], ids[*i as usize]);
+        let (triangles, ids) = bvh.primitive_indices.iter().map(by_slot).unzip();
         let bounds = tris.iter().fold(Aabb::empty(), |b, t| b.union(&t.aabb()));
-        let bvh = WideBvh::new(&bvh, |slot| triangles[slot as usize].aabb());
         Some(Self {
             bvh,
             triangles,
@@ -103,49 +78,50 @@ impl Blas {
             bounds,
         })
     }
+}
+
+/// A BVH over packed triangles, each tagged with a caller-chosen id, in the
+/// traversal layout of module `flat`.
+#[derive(Clone, Debug)]
+pub(crate) struct Blas {
+    bvh: FlatBvh,
+    /// Bounds of the hittable triangles.
+    pub bounds: Aabb,
+}
+
+impl Blas {
+    /// Builds the object-space BVH of `mesh` (obvhs `very_fast_build`),
+    /// ids = the mesh's triangle indices; `None` when it has no hittable
+    /// triangle.
+    pub fn build(mesh: &Mesh) -> Option<Self> {
+        let built = SlotTriangles::build(
+            (0..mesh.len() as u32).map(|tri| (tri, mesh.triangle(tri).map(Vec3A::from))),
+            BvhBuildParams::very_fast_build(),
+        )?;
+        Some(Self {
+            bvh: FlatBvh::new(&built),
+            bounds: built.bounds,
+        })
+    }
 
     /// Number of hittable triangles.
     pub fn len(&self) -> usize {
-        self.ids.len()
-    }
-
-    /// The id of the triangle in a leaf slot.
-    #[inline(always)]
-    pub fn id(&self, slot: u32) -> u32 {
-        self.ids[slot as usize]
+        self.bvh.len()
     }
 
     /// Approximate heap size in bytes.
     pub fn bytes(&self) -> usize {
-        self.bvh.bytes() + self.triangles.len() * size_of::<PackedTriangle>() + self.ids.len() * 4
+        self.bvh.bytes()
     }
 
-    /// Traces the object-space `ray`, box tests by `boxes`. Without `ANY`,
-    /// lowers `ray.t_max` to each closer hit and records it in `best`; with
-    /// `ANY`, stops at the first hit. Returns whether anything was hit.
+    /// Traces the object-space `ray`, box tests by `boxes` (see
+    /// [`FlatBvh::trace`]); the hit's id is the mesh's triangle index.
     #[inline(always)]
     pub fn trace<const ANY: bool>(
         &self,
         ray: &mut TraceRay,
         boxes: impl BoxTest,
-        best: &mut SlotHit,
-    ) -> bool {
-        let mut found = false;
-        walk(&self.bvh, ray, boxes, |slot, ray| {
-            let Some(hit) = self.triangles[slot as usize]
-                .intersect(ray.origin, &ray.shear, ray.t_min, ray.t_max)
-            else {
-                return false;
-            };
-            found = true;
-            ray.t_max = hit.t;
-            *best = SlotHit {
-                slot,
-                b1: hit.b1,
-                b2: hit.b2,
-            };
-            ANY
-        });
-        found
+    ) -> Option<FlatHit> {
+        self.bvh.trace::<ANY>(ray, boxes)
     }
 }

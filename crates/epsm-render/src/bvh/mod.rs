@@ -1,5 +1,7 @@
-//! Two-level BVH over the scene's objects (obvhs CWBVH at both levels, walked
-//! by our own loop in module `walk`).
+//! Two-level BVH over the scene's objects (obvhs CWBVH at both levels, built
+//! by obvhs): the static BVH converted to our own traversal layout (module
+//! `flat`), the instanced meshes' BVHs and the top level walked in obvhs's
+//! layout by our own loop (module `walk`).
 //!
 //! Static objects (all objects not made dynamic, except copies of a large
 //! shared mesh) are traced through one bottom-level BVH over their
@@ -25,7 +27,9 @@
 //! No parameters.
 
 mod blas;
+mod flat;
 mod node;
+mod packet;
 mod shading;
 mod tlas;
 mod triangle;
@@ -43,7 +47,8 @@ use obvhs::aabb::Aabb;
 use crate::hit::{self, Hit, SurfacePoint};
 use crate::ray::Ray;
 use crate::scene::{Mesh, Object, ObjectId};
-use blas::{Blas, SlotHit};
+use blas::Blas;
+use flat::FlatHit;
 #[cfg(target_arch = "x86_64")]
 pub(crate) use node::Avx;
 use node::TraceRay;
@@ -114,7 +119,7 @@ enum Found<'a> {
     /// The static BVH.
     World(&'a WorldBlas),
     /// The BVH of an instance of this object.
-    Instance(ObjectId, &'a Blas),
+    Instance(ObjectId),
 }
 
 impl Accel {
@@ -248,7 +253,7 @@ impl Accel {
         self.stats.objects = self.instances.len();
         self.stats.blas_count = self.blases.len() + usize::from(world.is_some());
         self.stats.triangles =
-            self.blases.iter().map(|b| b.len()).sum::<usize>() + world.map_or(0, |w| w.blas.len());
+            self.blases.iter().map(|b| b.len()).sum::<usize>() + world.map_or(0, |w| w.bvh.len());
         self.stats.bytes = self.blases.iter().map(|b| b.bytes()).sum::<usize>()
             + world.map_or(0, WorldBlas::bytes)
             + self.tlas.bytes()
@@ -322,14 +327,15 @@ impl Accel {
             ray.t_min,
             ray.t_max,
         );
-        let mut best = SlotHit::default();
+        let mut best = None;
         let mut found = Found::Nothing;
         if let Some(statics) = self.world.as_deref()
-            && statics.blas.trace::<ANY>(&mut world, boxes, &mut best)
+            && let Some(flat) = statics.bvh.trace::<ANY>(&mut world, boxes)
         {
             found = Found::World(statics);
+            best = Some(flat);
             if ANY || self.tlas.slots.is_empty() {
-                return hit(found, best, world.t_max);
+                return hit(found, best);
             }
         }
         if self.tlas.slots.is_empty() {
@@ -349,15 +355,15 @@ impl Accel {
                 world.t_min,
                 world.t_max,
             );
-            let bvh = &*self.blases[blas as usize];
-            if !bvh.trace::<ANY>(&mut local, boxes, &mut best) {
+            let Some(flat) = self.blases[blas as usize].trace::<ANY>(&mut local, boxes) else {
                 return false;
-            }
-            found = Found::Instance(instance.object, bvh);
+            };
+            found = Found::Instance(instance.object);
+            best = Some(flat);
             world.t_max = local.t_max;
             ANY
         });
-        hit(found, best, world.t_max)
+        hit(found, best)
     }
 
     /// The shading point of `hit` (unit normals, world space): from the
@@ -410,23 +416,24 @@ impl Accel {
     }
 }
 
-/// The [`Hit`] of bottom-level hit `best` in `found` at `t`.
+/// The [`Hit`] of bottom-level hit `best` in `found`.
 #[inline(always)]
-fn hit(found: Found<'_>, best: SlotHit, t: f32) -> Option<Hit> {
+fn hit(found: Found<'_>, best: Option<FlatHit>) -> Option<Hit> {
+    let best = best?;
     let (object, triangle, world_index) = match found {
         Found::Nothing => return None,
         Found::World(world) => {
-            let (source, index) = world.source(best.slot);
-            (source.object, source.triangle, index)
+            let source = world.source(best.id);
+            (source.object, source.triangle, best.id)
         }
-        Found::Instance(object, blas) => (object, blas.id(best.slot), NO_WORLD_INDEX),
+        Found::Instance(object) => (object, best.id, NO_WORLD_INDEX),
     };
     Some(Hit {
         object,
         triangle,
         b1: best.b1,
         b2: best.b2,
-        t,
+        t: best.t,
         world_index,
     })
 }

@@ -1,9 +1,11 @@
-//! Ray against the eight child boxes of a CWBVH node.
+//! Ray against the eight child boxes of a wide node ([`ChildBoxes`], used by
+//! the triangle BVHs of module `flat` and by the top level's CWBVH nodes).
 //!
 //! Model: Ylitie, Karras and Laine, "Efficient Incoherent Ray Traversal on
-//! GPUs Through Compressed Wide BVHs" (HPG 2017), as built by obvhs and
-//! walked in obvhs's order by our own loop (module `walk`), with four changes:
-//! - child boxes are stored as exact `f32` planes ([`WideNode`]; 224 bytes
+//! GPUs Through Compressed Wide BVHs" (HPG 2017), as built by obvhs; the top
+//! level is walked in obvhs's order by our own loop (module `walk`). Four
+//! changes to obvhs's node test:
+//! - child boxes are stored as exact `f32` planes ([`ChildBoxes`]; 224 bytes
 //!   per node instead of 80): converting 48 quantised bytes to floats was a
 //!   third of the instructions per node, and exact boxes are tighter. Measured
 //!   on the bench's bumpy sphere: 29 % fewer instructions per ray, 25 % more
@@ -100,14 +102,13 @@ const OCT_INV4: [u32; 8] = {
     table
 };
 
-/// A CWBVH node with its eight child boxes decompressed to `f32` planes
-/// (rounded outwards by one ULP), so the slab test converts no bytes; empty
-/// child slots get inverted boxes that no ray enters. Field names follow
-/// obvhs's `CwBvhNode`.
+/// A CWBVH node with its eight child boxes decompressed to exact `f32`
+/// planes ([`ChildBoxes`]), so the slab test converts no bytes. Field names
+/// follow obvhs's `CwBvhNode`.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct WideNode {
-    /// `planes[axis][0 = min, 1 = max]`: one plane per child, in child order.
-    planes: [[Lanes8; 2]; 3],
+    /// The child boxes.
+    boxes: ChildBoxes,
     /// Index of the first inner child node.
     pub child_base_idx: u32,
     /// Index of the first leaf primitive slot.
@@ -121,21 +122,9 @@ pub(crate) struct WideNode {
 impl WideNode {
     /// `node` with exact child boxes `children` (ignored for empty slots).
     fn new(node: &CwBvhNode, children: &[Aabb; 8]) -> Self {
-        let mut planes = [[Lanes8([0.0; 8]); 2]; 3];
-        for (child, aabb) in children.iter().enumerate() {
-            let empty = node.is_child_empty(child);
-            for (axis, [lo, hi]) in planes.iter_mut().enumerate() {
-                let (min, max) = if empty {
-                    (f32::INFINITY, f32::NEG_INFINITY)
-                } else {
-                    (aabb.min[axis], aabb.max[axis])
-                };
-                lo.0[child] = min;
-                hi.0[child] = max;
-            }
-        }
+        let present = std::array::from_fn(|child| !node.is_child_empty(child));
         Self {
-            planes,
+            boxes: ChildBoxes::new(children, present),
             child_base_idx: node.child_base_idx,
             primitive_base_idx: node.primitive_base_idx,
             child_meta: node.child_meta,
@@ -149,7 +138,7 @@ impl WideNode {
     /// obvhs's `CwBvhNode::get_child_and_index_bits`).
     #[inline(always)]
     pub fn intersect(&self, ray: &TraceRay, boxes: impl BoxTest) -> u32 {
-        let mut hit_children = boxes.hits(self, ray);
+        let mut hit_children = boxes.hits(&self.boxes, ray).mask;
         let meta8 = u64::from_le_bytes(self.child_meta);
         let oct_inv8 = u64::from(ray.oct_inv4) * 0x1_0000_0001;
         let inner8 = ((meta8 & (meta8 << 1)) & 0x1010_1010_1010_1010) >> 4;
@@ -165,12 +154,56 @@ impl WideNode {
         }
         hit_mask
     }
+}
 
-    /// Bit `c` set when `ray` enters child `c`'s box within its `t` range,
-    /// four children at a time with 128-bit vectors (SSE2 on x86-64).
+/// Eight `f32` lanes, one per child, aligned for one 256-bit load.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(32))]
+pub(crate) struct Lanes8(pub [f32; 8]);
+
+/// The eight child boxes of a wide node as exact `f32` planes (one lane per
+/// child, in child order); absent children get inverted boxes that no ray
+/// enters.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct ChildBoxes {
+    /// `planes[axis][0 = min, 1 = max]`.
+    planes: [[Lanes8; 2]; 3],
+}
+
+/// The result of a ray against [`ChildBoxes`].
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct BoxHits {
+    /// Bit `c` set when the ray enters child `c`'s box within its `t` range.
+    pub mask: u32,
+    /// Per child, the entry distance (in units of the ray's direction,
+    /// clamped below by `t_min`); meaningful only where `mask` is set.
+    pub entry: Lanes8,
+}
+
+impl ChildBoxes {
+    /// The boxes `children`; those with `present[c]` false are absent.
+    pub fn new(children: &[Aabb; 8], present: [bool; 8]) -> Self {
+        let mut planes = [[Lanes8([0.0; 8]); 2]; 3];
+        for (child, aabb) in children.iter().enumerate() {
+            for (axis, [lo, hi]) in planes.iter_mut().enumerate() {
+                let (min, max) = if present[child] {
+                    (aabb.min[axis], aabb.max[axis])
+                } else {
+                    (f32::INFINITY, f32::NEG_INFINITY)
+                };
+                lo.0[child] = min;
+                hi.0[child] = max;
+            }
+        }
+        Self { planes }
+    }
+
+    /// The boxes `ray` enters within its `t` range, four children at a time
+    /// with 128-bit vectors (SSE2 on x86-64).
     #[inline(always)]
-    fn box_hits_4x2(&self, ray: &TraceRay) -> u32 {
-        let mut hit_children = 0u32;
+    fn hits_4x2(&self, ray: &TraceRay) -> BoxHits {
+        let mut mask = 0u32;
+        let mut entry = Lanes8([0.0; 8]);
         for half in 0..2 {
             let lanes = |plane: &Lanes8| Vec4::from_slice(&plane.0[4 * half..4 * half + 4]);
             let slab = |axis: usize| {
@@ -184,23 +217,24 @@ impl WideNode {
             let ((x0, x1), (y0, y1), (z0, z1)) = (slab(0), slab(1), slab(2));
             let t0 = x0.max(y0).max(z0).max(Vec4::splat(ray.t_min));
             let t1 = (x1.min(y1).min(z1) * EXIT_SCALE).min(Vec4::splat(ray.t_max));
-            hit_children |= t0.cmple(t1).bitmask() << (4 * half);
+            mask |= t0.cmple(t1).bitmask() << (4 * half);
+            t0.write_to_slice(&mut entry.0[4 * half..4 * half + 4]);
         }
-        hit_children
+        BoxHits { mask, entry }
     }
 
-    /// [`WideNode::box_hits_4x2`] on all eight children at once with 256-bit
+    /// [`ChildBoxes::hits_4x2`] on all eight children at once with 256-bit
     /// AVX vectors: the same operations in the same operand order (`max`
     /// and `min` return their second operand when one is NaN, as SSE's do),
-    /// so the same mask.
+    /// so the same mask and entry distances.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx")]
     #[inline]
     #[allow(unsafe_code)]
-    fn box_hits_8(&self, ray: &TraceRay) -> u32 {
+    fn hits_8(&self, ray: &TraceRay) -> BoxHits {
         use std::arch::x86_64::{
             __m256, _CMP_LE_OS, _mm256_cmp_ps, _mm256_load_ps, _mm256_max_ps, _mm256_min_ps,
-            _mm256_movemask_ps, _mm256_mul_ps, _mm256_set1_ps, _mm256_sub_ps,
+            _mm256_movemask_ps, _mm256_mul_ps, _mm256_set1_ps, _mm256_store_ps, _mm256_sub_ps,
         };
         // SAFETY: `Lanes8` is eight `f32` aligned to 32 bytes, exactly what
         // the aligned load reads; AVX is enabled on this function.
@@ -226,20 +260,21 @@ impl WideNode {
             _mm256_set1_ps(EXIT_SCALE),
         );
         let t1 = _mm256_min_ps(exit, _mm256_set1_ps(ray.t_max));
-        _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OS>(t0, t1)) as u32
+        let mut entry = Lanes8([0.0; 8]);
+        // SAFETY: as the loads: eight `f32` aligned to 32 bytes.
+        unsafe { _mm256_store_ps(entry.0.as_mut_ptr(), t0) };
+        BoxHits {
+            mask: _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OS>(t0, t1)) as u32,
+            entry,
+        }
     }
 }
 
-/// Eight `f32` lanes, one per child, aligned for one 256-bit load.
-#[derive(Clone, Copy, Debug)]
-#[repr(C, align(32))]
-struct Lanes8([f32; 8]);
-
 /// How a node's eight child boxes are tested against a ray.
 pub(crate) trait BoxTest: Copy {
-    /// Bit `c` set when the ray enters child `c`'s box within its `t` range
-    /// (empty children never).
-    fn hits(self, node: &WideNode, ray: &TraceRay) -> u32;
+    /// The children whose boxes the ray enters within its `t` range (absent
+    /// children never) and their entry distances.
+    fn hits(self, boxes: &ChildBoxes, ray: &TraceRay) -> BoxHits;
 }
 
 /// Box tests with 128-bit vectors, on every CPU.
@@ -248,8 +283,8 @@ pub(crate) struct Portable;
 
 impl BoxTest for Portable {
     #[inline(always)]
-    fn hits(self, node: &WideNode, ray: &TraceRay) -> u32 {
-        node.box_hits_4x2(ray)
+    fn hits(self, boxes: &ChildBoxes, ray: &TraceRay) -> BoxHits {
+        boxes.hits_4x2(ray)
     }
 }
 
@@ -272,10 +307,10 @@ impl Avx {
 impl BoxTest for Avx {
     #[inline(always)]
     #[allow(unsafe_code)]
-    fn hits(self, node: &WideNode, ray: &TraceRay) -> u32 {
+    fn hits(self, boxes: &ChildBoxes, ray: &TraceRay) -> BoxHits {
         // SAFETY: an `Avx` is only made by `Avx::detect` after finding AVX
-        // on this CPU, which is all `box_hits_8` requires.
-        unsafe { node.box_hits_8(ray) }
+        // on this CPU, which is all `hits_8` requires.
+        unsafe { boxes.hits_8(ray) }
     }
 }
 
@@ -290,25 +325,10 @@ impl WideBvh {
     /// The nodes of `bvh` with exact child boxes (tighter than its 8-bit
     /// quantised ones), from the box of each leaf primitive slot (`leaf_box`).
     pub fn new(bvh: &CwBvh, leaf_box: impl Fn(u32) -> Aabb) -> Self {
-        // Children come after their parent in obvhs's layout: go bottom-up.
-        let mut node_box = vec![Aabb::empty(); bvh.nodes.len()];
-        let mut child_boxes = vec![[Aabb::empty(); 8]; bvh.nodes.len()];
-        for (i, node) in bvh.nodes.iter().enumerate().rev() {
-            for child in (0..8).filter(|&c| !node.is_child_empty(c)) {
-                let aabb = if node.is_leaf(child) {
-                    let (start, count) = node.child_primitives(child);
-                    (start..start + count).fold(Aabb::empty(), |b, s| b.union(&leaf_box(s)))
-                } else {
-                    node_box[node.child_node_index(child) as usize]
-                };
-                child_boxes[i][child] = aabb;
-                node_box[i] = node_box[i].union(&aabb);
-            }
-        }
-        let nodes = bvh.nodes.iter().zip(&child_boxes);
+        let nodes = bvh.nodes.iter().zip(exact_child_boxes(bvh, leaf_box));
         Self {
             nodes: nodes
-                .map(|(node, children)| WideNode::new(node, children))
+                .map(|(node, children)| WideNode::new(node, &children))
                 .collect(),
         }
     }
@@ -317,4 +337,25 @@ impl WideBvh {
     pub fn bytes(&self) -> usize {
         self.nodes.len() * size_of::<WideNode>()
     }
+}
+
+/// Per node of `bvh`, the exact boxes of its eight children (empty for
+/// absent children), from the box of each leaf primitive slot (`leaf_box`).
+pub(crate) fn exact_child_boxes(bvh: &CwBvh, leaf_box: impl Fn(u32) -> Aabb) -> Vec<[Aabb; 8]> {
+    // Children come after their parent in obvhs's layout: go bottom-up.
+    let mut node_box = vec![Aabb::empty(); bvh.nodes.len()];
+    let mut child_boxes = vec![[Aabb::empty(); 8]; bvh.nodes.len()];
+    for (i, node) in bvh.nodes.iter().enumerate().rev() {
+        for child in (0..8).filter(|&c| !node.is_child_empty(c)) {
+            let aabb = if node.is_leaf(child) {
+                let (start, count) = node.child_primitives(child);
+                (start..start + count).fold(Aabb::empty(), |b, s| b.union(&leaf_box(s)))
+            } else {
+                node_box[node.child_node_index(child) as usize]
+            };
+            child_boxes[i][child] = aabb;
+            node_box[i] = node_box[i].union(&aabb);
+        }
+    }
+    child_boxes
 }

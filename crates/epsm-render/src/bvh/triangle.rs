@@ -1,11 +1,13 @@
-//! Watertight ray–triangle intersection in `f32`.
+//! Watertight ray–triangle intersection in `f32`: the per-ray constants,
+//! the stored triangle and the one-triangle reference test (traversal tests
+//! four at a time, module `packet`, rounding exactly as this one).
 //!
 //! Model: Woop, Benthin and Wald, "Watertight Ray/Triangle Intersection"
 //! (JCGT 2013). Per ray ([`RayShear`]): the axis `kz` where the direction is
 //! largest, the two others `kx, ky` (swapped when `dir[kz] < 0` to keep the
 //! winding), and the shear `(Sx, Sy, Sz) = (dx/dz, dy/dz, 1/dz)` that maps the
-//! direction to `+z`. Per triangle: the vertices relative to the origin are
-//! sheared to 2D and the edge functions `U, V, W` (weights of `p0, p1, p2`)
+//! direction to `+z`, applied as `v[kx] − Sx·v[kz]` etc. Per triangle: the
+//! vertices relative to the origin are sheared to 2D and the edge functions `U, V, W` (weights of `p0, p1, p2`)
 //! are evaluated; an edge function that rounds to exactly zero is recomputed
 //! in `f64`, so a ray through a shared edge or vertex hits at least one of the
 //! triangles sharing it: closed meshes do not leak (Möller–Trumbore leaked
@@ -19,16 +21,17 @@
 //!
 //! No parameters.
 
-use glam::{Mat3A, Vec3A};
+use glam::Vec3A;
 use obvhs::aabb::Aabb;
 
-/// Per-ray constants of the watertight test: the shear as a matrix whose rows
-/// are `e_kx − Sx·e_kz`, `e_ky − Sy·e_kz` and `Sz·e_kz` (its products with 0
-/// and 1 are exact, so `M·v` rounds exactly as the paper's
-/// `v[kx] − Sx·v[kz]`, without per-triangle index shuffles).
+/// Per-ray constants of the watertight test.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct RayShear {
-    m: Mat3A,
+    /// The axes `[kx, ky, kz]`.
+    pub axes: [usize; 3],
+    /// `(−Sx, −Sy, Sz)`: a vertex `v` relative to the origin shears to
+    /// `(v[kx] + (−Sx)·v[kz], v[ky] + (−Sy)·v[kz], Sz·v[kz])`.
+    pub kz_col: [f32; 3],
 }
 
 impl RayShear {
@@ -43,21 +46,15 @@ impl RayShear {
         let x_largest = (a.x >= a.y) & (a.x >= a.z);
         let y_ge_z = a.y >= a.z;
         let kz = usize::from(!x_largest) + usize::from(!x_largest & !y_ge_z);
-        let dz = dir.to_array()[kz];
-        let case = 2 * kz + usize::from(dz < 0.0);
-        let sz = 1.0 / dz;
-        // Column kz of the shear is (−Sx, −Sy, Sz) with `S = dir[k]·sz` (as
-        // the paper rounds it); the others are the unit axes `BASE` places.
-        // Adding it to the zero column kz through a 0/1 weight is exact.
-        let [kx, ky] = AXES_ACROSS[case];
         let d = dir.to_array();
-        let kz_col = Vec3A::new(-(d[kx] * sz), -(d[ky] * sz), sz);
-        let mut m = BASE[case];
-        let at_kz = Vec3A::AXES[kz];
-        m.x_axis += kz_col * at_kz.x;
-        m.y_axis += kz_col * at_kz.y;
-        m.z_axis += kz_col * at_kz.z;
-        Self { m }
+        let dz = d[kz];
+        let [kx, ky] = AXES_ACROSS[2 * kz + usize::from(dz < 0.0)];
+        // `S = dir[k]·sz`, as the paper rounds it.
+        let sz = 1.0 / dz;
+        Self {
+            axes: [kx, ky, kz],
+            kz_col: [-(d[kx] * sz), -(d[ky] * sz), sz],
+        }
     }
 }
 
@@ -66,22 +63,6 @@ impl RayShear {
 /// keep the winding.
 const AXES_ACROSS: [[usize; 2]; 6] = [[1, 2], [2, 1], [2, 0], [0, 2], [0, 1], [1, 0]];
 
-/// The shear of each row of [`AXES_ACROSS`] without its `kz` column: column
-/// `kx` is `+x` (the sheared x takes `v[kx]`), column `ky` is `+y`, column
-/// `kz` zero.
-const BASE: [Mat3A; 6] = {
-    let mut table = [Mat3A::ZERO; 6];
-    let mut case = 0;
-    while case < 6 {
-        let mut cols = [[0.0f32; 3]; 3];
-        cols[AXES_ACROSS[case][0]][0] = 1.0;
-        cols[AXES_ACROSS[case][1]][1] = 1.0;
-        table[case] = Mat3A::from_cols_array_2d(&cols);
-        case += 1;
-    }
-    table
-};
-
 /// One triangle's vertices, object space.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct PackedTriangle {
@@ -89,6 +70,7 @@ pub(crate) struct PackedTriangle {
 }
 
 /// A ray–triangle hit: ray parameter and barycentrics `(b1, b2)`.
+#[cfg(test)]
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct TriangleHit {
     /// Ray parameter.
@@ -108,14 +90,20 @@ impl PackedTriangle {
         (finite && n != Vec3A::ZERO).then_some(Self { p })
     }
 
+    /// The vertices `[p0, p1, p2]`.
+    pub fn vertices(&self) -> &[Vec3A; 3] {
+        &self.p
+    }
+
     /// The triangle's bounding box.
     pub fn aabb(&self) -> Aabb {
         Aabb::from_points(&self.p)
     }
 
     /// The hit of the ray `origin + t·dir` (`dir` given by its `shear`) with
-    /// `t` in `[t_min, t_max]`, if any.
-    #[inline(always)]
+    /// `t` in `[t_min, t_max]`, if any: the one-triangle reference of
+    /// [`TrianglePacket::intersect`](super::packet::TrianglePacket::intersect).
+    #[cfg(test)]
     pub fn intersect(
         &self,
         origin: Vec3A,
@@ -125,7 +113,12 @@ impl PackedTriangle {
     ) -> Option<TriangleHit> {
         // Vertices relative to the origin, sheared: (x, y) in the plane
         // across the ray, z along it.
-        let [a, b, c] = self.p.map(|p| shear.m * (p - origin));
+        let [kx, ky, kz] = shear.axes;
+        let [nsx, nsy, sz] = shear.kz_col;
+        let [a, b, c] = self.p.map(|p| {
+            let r = (p - origin).to_array();
+            Vec3A::new(r[kx] + nsx * r[kz], r[ky] + nsy * r[kz], sz * r[kz])
+        });
         let edge = |p: Vec3A, q: Vec3A| p.x * q.y - p.y * q.x;
         let (mut u, mut v, mut w) = (edge(c, b), edge(a, c), edge(b, a));
         if u == 0.0 || v == 0.0 || w == 0.0 {

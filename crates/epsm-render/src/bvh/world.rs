@@ -13,7 +13,8 @@
 //! so a static hit's shading point needs no transform.
 //!
 //! Built with obvhs `fast_build` (PLOC with a wider search and more
-//! reinsertion than the per-mesh `very_fast_build`): large and small
+//! reinsertion than the per-mesh `very_fast_build`), then converted to the
+//! traversal layout of module `flat`: large and small
 //! triangles mix here, and on `scenes/caustic-box.toml` (six wall rectangles,
 //! a light rectangle and a 5120-triangle sphere) it visits 1.93 nodes per ray
 //! instead of 2.48, 4 % fewer instructions per sample (callgrind); `medium`
@@ -24,7 +25,8 @@
 use glam::{DMat3, Vec3A};
 use obvhs::BvhBuildParams;
 
-use super::blas::Blas;
+use super::blas::SlotTriangles;
+use super::flat::FlatBvh;
 use super::shading::ShadingTriangle;
 use super::triangle::PackedTriangle;
 use crate::scene::{Object, ObjectId};
@@ -41,8 +43,8 @@ pub(crate) struct TriangleRef {
 /// The static objects' world-space triangles and their BVH.
 #[derive(Clone, Debug)]
 pub(crate) struct WorldBlas {
-    /// The BVH; slot ids index `refs`.
-    pub blas: Blas,
+    /// The BVH; its triangle ids index `refs`.
+    pub bvh: FlatBvh,
     /// The source of each input triangle.
     refs: Vec<TriangleRef>,
     /// The shading data of each input triangle (same indices as `refs`).
@@ -83,22 +85,21 @@ impl WorldBlas {
                 });
             }
         }
-        let blas = Blas::from_triangles(world.into_iter(), BvhBuildParams::fast_build())?;
-        let left_out = inputs - blas.len();
+        let built = SlotTriangles::build(world.into_iter(), BvhBuildParams::fast_build())?;
+        let bvh = FlatBvh::new(&built);
+        let left_out = inputs - bvh.len();
         Some(Self {
-            blas,
+            bvh,
             refs,
             shading,
             left_out,
         })
     }
 
-    /// The source of the triangle in leaf slot `slot` and its index in the
-    /// shading table.
+    /// The source of the triangle with table index `index` (a hit's id).
     #[inline(always)]
-    pub fn source(&self, slot: u32) -> (TriangleRef, u32) {
-        let index = self.blas.id(slot);
-        (self.refs[index as usize], index)
+    pub fn source(&self, index: u32) -> TriangleRef {
+        self.refs[index as usize]
     }
 
     /// The shading data of the triangle with table index `index`, if that
@@ -114,7 +115,7 @@ impl WorldBlas {
 
     /// Approximate heap size in bytes.
     pub fn bytes(&self) -> usize {
-        self.blas.bytes()
+        self.bvh.bytes()
             + self.refs.len() * size_of::<TriangleRef>()
             + self.shading.len() * size_of::<ShadingTriangle>()
     }

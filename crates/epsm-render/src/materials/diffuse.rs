@@ -30,7 +30,7 @@ pub struct Diffuse {
 
 impl Diffuse {
     /// Samples a cosine-distributed `wo` (local, upper hemisphere; `wi.z > 0`).
-    #[inline]
+    #[inline(always)]
     pub(super) fn sample(&self, uv: Vec2, u: Vec2) -> Option<BsdfSample> {
         let wo = cosine_hemisphere(u);
         let pdf = wo.z * FRAC_1_PI;

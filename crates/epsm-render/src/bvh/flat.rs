@@ -1,0 +1,382 @@
+//! The traversal layout of the static BVH: obvhs's CWBVH converted once into
+//! 8-wide nodes with exact `f32` child boxes and direct child references,
+//! and leaves as packets of up to four triangles tested at once.
+//!
+//! Model: the tree is the one obvhs builds (same nodes, same leaves, same
+//! triangles per leaf); only its encoding and the walk change. A CWBVH node
+//! stores its children relative to base indices with per-child metadata
+//! bytes that every visit decodes (Ylitie, Karras and Laine, HPG 2017, made
+//! for GPUs' memory bandwidth); here each child slot holds the index of its
+//! node or of its leaf's [`TrianglePacket`] (a CWBVH leaf has at most three
+//! triangles, so one packet), and a mask says which slots are leaves.
+//!
+//! The walk (closest hit) tests a node's eight boxes at once, then first the
+//! packets of the leaf children hit (their hits lower `t_max`), then pushes
+//! the inner children entered before `t_max` on a stack sorted by entry
+//! distance, nearest on top, and continues with the nearest pending node not
+//! culled by the current `t_max`. With `ANY` (occlusion, shadow rays) it
+//! returns at the first hit within `[t_min, t_max]`.
+//!
+//! The stack holds [`STACK`] nodes; a node pushes at most seven entries
+//! beyond the one it continues with, so trees up to 18 levels deep never
+//! overflow it ([`FlatBvh::stack_need`] is computed at build time and tested
+//! against it). A deeper tree (obvhs's PLOC builds give about
+//! `log8(triangles) + 3` levels) would lose pending nodes past the capacity,
+//! as obvhs's own walk does past 32 levels.
+//!
+//! No parameters.
+
+use std::mem::MaybeUninit;
+
+use super::blas::SlotTriangles;
+use super::node::{BoxTest, ChildBoxes, TraceRay, exact_child_boxes};
+use super::packet::{LANES, TrianglePacket};
+
+/// Capacity of the traversal stack, in nodes.
+const STACK: usize = 128;
+
+/// One node: eight child boxes and what each child is.
+#[derive(Clone, Copy, Debug)]
+struct FlatNode {
+    /// The child boxes (absent children: inverted, never entered).
+    boxes: ChildBoxes,
+    /// Per child slot: the node index of an inner child, the packet index
+    /// of a leaf child (0 for absent children).
+    children: [u32; 8],
+    /// Bit `c` set when child `c` is a leaf.
+    leaves: u8,
+    /// Bit `c` set when child `c` is an inner node (a ray with a NaN
+    /// origin "enters" every box, absent ones too: only these two masks say
+    /// which children exist).
+    inner: u8,
+}
+
+/// A hit in the static BVH.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct FlatHit {
+    /// The caller's id of the triangle hit.
+    pub id: u32,
+    /// Ray parameter, in units of the ray's direction.
+    pub t: f32,
+    /// Barycentric weight of `p1`.
+    pub b1: f32,
+    /// Barycentric weight of `p2`.
+    pub b2: f32,
+}
+
+/// 8-wide nodes over triangle packets, root first.
+#[derive(Clone, Debug)]
+pub(crate) struct FlatBvh {
+    nodes: Vec<FlatNode>,
+    packets: Vec<TrianglePacket>,
+    /// Per packet, the caller's id of each lane's triangle.
+    ids: Vec<[u32; LANES]>,
+    /// Triangles in the packets.
+    len: usize,
+}
+
+impl FlatBvh {
+    /// Converts the obvhs CWBVH of `built` (its nodes and leaves unchanged).
+    pub fn new(built: &SlotTriangles) -> Self {
+        let boxes = exact_child_boxes(&built.bvh, |slot| built.triangles[slot as usize].aabb());
+        let mut packets = Vec::new();
+        let mut ids = Vec::new();
+        let mut nodes = Vec::with_capacity(built.bvh.nodes.len());
+        for (node, children_boxes) in built.bvh.nodes.iter().zip(&boxes) {
+            let mut children = [0u32; 8];
+            let (mut leaves, mut inner) = (0u8, 0u8);
+            for (child, slot) in children.iter_mut().enumerate() {
+                if node.is_child_empty(child) {
+                    continue;
+                }
+                if !node.is_leaf(child) {
+                    *slot = node.child_node_index(child);
+                    inner |= 1 << child;
+                    continue;
+                }
+                let (start, count) = node.child_primitives(child);
+                let range = start as usize..(start + count) as usize;
+                debug_assert!((1..=LANES).contains(&range.len()), "CWBVH leaf of {count}");
+                let mut lane_ids = [u32::MAX; LANES];
+                lane_ids[..range.len()].copy_from_slice(&built.ids[range.clone()]);
+                *slot = packets.len() as u32;
+                packets.push(TrianglePacket::new(&built.triangles[range]));
+                ids.push(lane_ids);
+                leaves |= 1 << child;
+            }
+            let present = std::array::from_fn(|child| !node.is_child_empty(child));
+            nodes.push(FlatNode {
+                boxes: ChildBoxes::new(children_boxes, present),
+                children,
+                leaves,
+                inner,
+            });
+        }
+        Self {
+            nodes,
+            packets,
+            ids,
+            len: built.triangles.len(),
+        }
+    }
+
+    /// Number of triangles.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Approximate heap size in bytes.
+    pub fn bytes(&self) -> usize {
+        self.nodes.len() * size_of::<FlatNode>()
+            + self.packets.len() * size_of::<TrianglePacket>()
+            + self.ids.len() * size_of::<[u32; LANES]>()
+    }
+
+    /// The most stack entries a walk can hold at once (at most [`STACK`]
+    /// for the walk to be exact).
+    #[cfg(test)]
+    fn stack_need(&self) -> usize {
+        fn need(bvh: &FlatBvh, node: usize) -> usize {
+            let n = &bvh.nodes[node];
+            let inner = (0..8).filter(|&c| n.inner & (1 << c) != 0);
+            let deepest = inner.clone().map(|c| need(bvh, n.children[c] as usize));
+            let count = inner.count();
+            // All inner children are pushed, then the nearest popped.
+            count.max(count.saturating_sub(1) + deepest.max().unwrap_or(0))
+        }
+        if self.nodes.is_empty() {
+            0
+        } else {
+            need(self, 0)
+        }
+    }
+
+    /// Traces `ray`, box tests by `boxes`: without `ANY` the closest hit
+    /// with `t` in `[t_min, t_max]` (lowering `ray.t_max` to it), with `ANY`
+    /// the first hit found.
+    #[inline(always)]
+    #[allow(unsafe_code)]
+    pub fn trace<const ANY: bool>(
+        &self,
+        ray: &mut TraceRay,
+        boxes: impl BoxTest,
+    ) -> Option<FlatHit> {
+        if self.nodes.is_empty() {
+            return None;
+        }
+        let mut best = None;
+        let mut stack = [MaybeUninit::<(u32, f32)>::uninit(); STACK];
+        let mut depth = 0usize;
+        let mut node = 0usize;
+        loop {
+            let n = &self.nodes[node];
+            let hits = boxes.hits(&n.boxes, ray);
+            // Leaf children first: their hits lower `t_max`, which culls the
+            // inner children below.
+            let mut leaves = hits.mask & u32::from(n.leaves);
+            while leaves != 0 {
+                let child = leaves.trailing_zeros() as usize;
+                leaves &= leaves - 1;
+                let packet = n.children[child] as usize;
+                let Some(hit) =
+                    self.packets[packet].intersect(ray.origin, &ray.shear, ray.t_min, ray.t_max)
+                else {
+                    continue;
+                };
+                ray.t_max = hit.t;
+                best = Some(FlatHit {
+                    id: self.ids[packet][hit.lane],
+                    t: hit.t,
+                    b1: hit.b1,
+                    b2: hit.b2,
+                });
+                if ANY {
+                    return best;
+                }
+            }
+            // Inner children entered before `t_max`, sorted into the stack
+            // above the entries of earlier nodes: nearest on top.
+            let mut inner = hits.mask & u32::from(n.inner);
+            let base = depth;
+            while inner != 0 {
+                let child = inner.trailing_zeros() as usize;
+                inner &= inner - 1;
+                let entry = hits.entry.0[child];
+                if entry > ray.t_max || depth == STACK {
+                    continue;
+                }
+                let mut at = depth;
+                // SAFETY: entries below `depth` have been written (`at - 1`
+                // is in `base..depth`).
+                while at > base && unsafe { stack[at - 1].assume_init().1 } < entry {
+                    stack[at] = stack[at - 1];
+                    at -= 1;
+                }
+                stack[at] = MaybeUninit::new((n.children[child], entry));
+                depth += 1;
+            }
+            // The nearest pending node not culled by `t_max`.
+            loop {
+                if depth == 0 {
+                    return best;
+                }
+                depth -= 1;
+                // SAFETY: `depth` only grows right after a write at or below
+                // it, so every entry below the old `depth` has been written.
+                let (next, entry) = unsafe { stack[depth].assume_init() };
+                if entry <= ray.t_max {
+                    node = next as usize;
+                    break;
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bvh::Portable;
+    use crate::bvh::triangle::RayShear;
+    use crate::scene::Mesh;
+    use epsm_testkit::Rng;
+    use glam::Vec3A;
+    use obvhs::BvhBuildParams;
+    use obvhs::ray::RayHit;
+
+    /// A soup of `count` triangles in `[-1, 1]³`: a third thin slivers, a
+    /// few exactly degenerate (left out), some sharing edges.
+    fn soup(rng: &mut Rng, count: usize) -> Mesh {
+        let mut mesh = Mesh::default();
+        for i in 0..count {
+            let a = rng.dvec3(-1.0, 1.0).as_vec3();
+            let b = a + rng.dvec3(-0.4, 0.4).as_vec3();
+            let c = match i % 7 {
+                0 | 3 => {
+                    a + (b - a) * rng.range(0.1, 0.9) as f32 + rng.dvec3(-1e-5, 1e-5).as_vec3()
+                }
+                5 => a + (b - a) * 0.5,
+                _ => a + rng.dvec3(-0.4, 0.4).as_vec3(),
+            };
+            let base = mesh.positions.len() as u32;
+            mesh.positions.extend([a, b, c]);
+            mesh.indices.push([base, base + 1, base + 2]);
+            if i % 4 == 1 {
+                let d = c + rng.dvec3(-0.3, 0.3).as_vec3();
+                mesh.positions.push(d);
+                mesh.indices.push([base + 2, base + 1, base + 3]);
+            }
+        }
+        mesh
+    }
+
+    fn triangles(mesh: &Mesh) -> impl Iterator<Item = (u32, [Vec3A; 3])> + '_ {
+        (0..mesh.len() as u32).map(|tri| (tri, mesh.triangle(tri).map(Vec3A::from)))
+    }
+
+    fn random_ray(rng: &mut Rng, i: usize) -> TraceRay {
+        let origin = Vec3A::from(rng.dvec3(-1.6, 1.6).as_vec3());
+        let mut dir = Vec3A::from(rng.unit().as_vec3());
+        if i.is_multiple_of(5) {
+            dir[rng.below(3)] = 0.0;
+        }
+        let t_max = if i.is_multiple_of(3) {
+            rng.range(0.0, 2.0) as f32
+        } else {
+            f32::INFINITY
+        };
+        TraceRay::new(origin, dir * rng.range(0.5, 2.0) as f32, 0.0, t_max)
+    }
+
+    /// The flat walk finds the closest hit of brute force over the same
+    /// triangles and of obvhs's own traversal of the CWBVH it was converted
+    /// from (same `t`; the same triangle and barycentrics unless two are hit
+    /// at exactly that `t`), and occlusion agrees with the closest hit.
+    #[test]
+    fn flat_walk_matches_obvhs_walk_and_brute_force() {
+        let mut rng = Rng::new(5);
+        let mesh = soup(&mut rng, 4000);
+        let built = SlotTriangles::build(triangles(&mesh), BvhBuildParams::very_fast_build())
+            .expect("triangles");
+        let flat = FlatBvh::new(&built);
+        assert!(flat.len() < mesh.len(), "degenerate triangles left out");
+        assert!(flat.stack_need() <= STACK, "{}", flat.stack_need());
+        let (mut hits, mut compared) = (0, 0);
+        for i in 0..20_000 {
+            let ray = random_ray(&mut rng, i);
+            let found = flat.trace::<false>(&mut ray.clone(), Portable);
+            let scalar = |slot: usize| {
+                let tri = &built.triangles[slot];
+                tri.intersect(ray.origin, &ray.shear, ray.t_min, ray.t_max)
+            };
+            let brute = (0..built.triangles.len())
+                .filter_map(|slot| Some((built.ids[slot], scalar(slot)?)))
+                .min_by(|a, b| a.1.t.total_cmp(&b.1.t));
+            assert_eq!(found.map(|h| h.t), brute.map(|b| b.1.t), "ray {i}: {ray:?}");
+            // obvhs culls boxes nearer than 1e-4 and accepts only `t < t_max`.
+            let mut obvhs_hit = RayHit::none();
+            let obvhs_ray = obvhs::ray::Ray::new(ray.origin, ray.dir, ray.t_min, ray.t_max);
+            let walked = built
+                .bvh
+                .ray_traverse(obvhs_ray, &mut obvhs_hit, |_, slot| {
+                    scalar(slot).map_or(f32::INFINITY, |h| h.t)
+                });
+            if let Some(f) = found
+                && f.t > 1e-3
+                && f.t < ray.t_max
+            {
+                assert!(walked, "ray {i}");
+                assert_eq!(f.t, obvhs_hit.t, "ray {i}");
+                let slot = obvhs_hit.primitive_id as usize;
+                if built.ids[slot] == f.id {
+                    let h = scalar(slot).expect("hit");
+                    assert_eq!((f.b1, f.b2), (h.b1, h.b2), "ray {i}");
+                }
+                compared += 1;
+            }
+            let occluded = flat.trace::<true>(&mut ray.clone(), Portable);
+            assert_eq!(occluded.is_some(), found.is_some(), "ray {i}");
+            hits += usize::from(found.is_some());
+        }
+        assert!(
+            hits > 4000 && compared > 3000,
+            "{hits} hits, {compared} compared"
+        );
+    }
+
+    /// Every lane of a packet hits exactly as the scalar test of its
+    /// triangle, through edges, vertices and the f64 fallback.
+    #[test]
+    fn packet_lanes_match_scalar_test() {
+        let mut rng = Rng::new(9);
+        let mesh = soup(&mut rng, 400);
+        let built = SlotTriangles::build(triangles(&mesh), BvhBuildParams::very_fast_build())
+            .expect("triangles");
+        for (k, chunk) in built.triangles.chunks(3).enumerate() {
+            let packet = TrianglePacket::new(chunk);
+            for i in 0..40 {
+                // Rays aimed at a vertex, an edge point or inside.
+                let target = chunk[i % chunk.len()].vertices();
+                let w = match i % 3 {
+                    0 => [1.0, 0.0, 0.0],
+                    1 => [0.5, 0.5, 0.0],
+                    _ => [0.2, 0.3, 0.5],
+                };
+                let aim = target[0] * w[0] + target[1] * w[1] + target[2] * w[2];
+                let origin = Vec3A::from(rng.dvec3(-2.0, 2.0).as_vec3());
+                let shear = RayShear::new(aim - origin);
+                let scalar = chunk
+                    .iter()
+                    .enumerate()
+                    .filter_map(|(l, t)| Some((l, t.intersect(origin, &shear, 0.0, 10.0)?)))
+                    .min_by(|a, b| a.1.t.total_cmp(&b.1.t));
+                let lanes = packet.intersect(origin, &shear, 0.0, 10.0);
+                assert_eq!(
+                    lanes.map(|h| (h.lane, h.t, h.b1, h.b2)),
+                    scalar.map(|(l, h)| (l, h.t, h.b1, h.b2)),
+                    "packet {k} ray {i}"
+                );
+            }
+        }
+    }
+}

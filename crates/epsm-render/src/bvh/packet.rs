@@ -1,0 +1,170 @@
+//! Up to four triangles tested against one ray at once.
+//!
+//! Model: the watertight test of module `triangle` (Woop, Benthin and Wald,
+//! JCGT 2013) with one triangle per lane of 128-bit vectors: the vertices are
+//! stored per coordinate (structure of arrays), so the ray's axis permutation
+//! `(kx, ky, kz)` only picks which lanes to load. Every lane rounds exactly as
+//! [`PackedTriangle::intersect`] does (the shear `v[kx] + (−Sx)·v[kz]` is the
+//! product `M·v` of its matrix without the exact zero terms; no fused
+//! multiply–add), so a lane hits exactly when the scalar test hits, with the
+//! same `t` and barycentrics; an edge function that rounds to zero is
+//! recomputed in `f64` for that lane, as there. Unused lanes hold NaN
+//! vertices, which every range test fails.
+//!
+//! Of several lanes hit, the closest wins; among equal `t`, the lowest lane.
+//!
+//! No parameters.
+
+use glam::{Vec3A, Vec4};
+
+use super::triangle::{PackedTriangle, RayShear};
+
+/// Triangles per packet.
+pub(crate) const LANES: usize = 4;
+
+/// Up to [`LANES`] triangles, coordinates by vertex and axis.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct TrianglePacket {
+    /// `p[vertex][axis]`, lane `i` = triangle `i` (NaN in unused lanes).
+    p: [[Vec4; 3]; 3],
+}
+
+/// The closest hit in a packet.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct PacketHit {
+    /// The lane (triangle) hit.
+    pub lane: usize,
+    /// Ray parameter, in units of the ray's direction.
+    pub t: f32,
+    /// Barycentric weight of `p1`.
+    pub b1: f32,
+    /// Barycentric weight of `p2`.
+    pub b2: f32,
+}
+
+/// Vertices relative to the ray origin, sheared (`x, y` across the ray, `z`
+/// along it), one lane per triangle.
+#[derive(Clone, Copy)]
+struct Sheared {
+    x: Vec4,
+    y: Vec4,
+    z: Vec4,
+}
+
+impl TrianglePacket {
+    /// The packet of `triangles` (one to [`LANES`]) in lane order.
+    pub fn new(triangles: &[PackedTriangle]) -> Self {
+        debug_assert!((1..=LANES).contains(&triangles.len()));
+        let mut p = [[[f32::NAN; LANES]; 3]; 3];
+        for (lane, triangle) in triangles.iter().enumerate() {
+            for (vertex, v) in triangle.vertices().iter().enumerate() {
+                for axis in 0..3 {
+                    p[vertex][axis][lane] = v[axis];
+                }
+            }
+        }
+        Self {
+            p: p.map(|v| v.map(Vec4::from_array)),
+        }
+    }
+
+    /// The closest hit of the ray `origin + t·dir` (`dir` given by its
+    /// `shear`) with `t` in `[t_min, t_max]`, if any lane has one.
+    #[inline(always)]
+    pub fn intersect(
+        &self,
+        origin: Vec3A,
+        shear: &RayShear,
+        t_min: f32,
+        t_max: f32,
+    ) -> Option<PacketHit> {
+        let [kx, ky, kz] = shear.axes;
+        let o = origin.to_array();
+        let (ox, oy, oz) = (Vec4::splat(o[kx]), Vec4::splat(o[ky]), Vec4::splat(o[kz]));
+        let [nsx, nsy, sz] = shear.kz_col.map(Vec4::splat);
+        let sheared = |p: &[Vec4; 3]| {
+            let z = p[kz] - oz;
+            Sheared {
+                x: (p[kx] - ox) + nsx * z,
+                y: (p[ky] - oy) + nsy * z,
+                z: sz * z,
+            }
+        };
+        let [a, b, c] = [
+            sheared(&self.p[0]),
+            sheared(&self.p[1]),
+            sheared(&self.p[2]),
+        ];
+        let edge = |p: &Sheared, q: &Sheared| p.x * q.y - p.y * q.x;
+        let (mut u, mut v, mut w) = (edge(&c, &b), edge(&a, &c), edge(&b, &a));
+        let zero = u.cmpeq(Vec4::ZERO) | v.cmpeq(Vec4::ZERO) | w.cmpeq(Vec4::ZERO);
+        if zero.any() {
+            (u, v, w) = edges_f64(zero.bitmask(), [&a, &b, &c], [u, v, w]);
+        }
+        let negative = u.cmplt(Vec4::ZERO) | v.cmplt(Vec4::ZERO) | w.cmplt(Vec4::ZERO);
+        let positive = u.cmpgt(Vec4::ZERO) | v.cmpgt(Vec4::ZERO) | w.cmpgt(Vec4::ZERO);
+        let det = u + v + w;
+        // `flip` of the scalar test (negate when det's sign bit is set); a
+        // lane where that differs from `det < 0` (det = −0 or NaN) fails
+        // `den > 0` below.
+        let flip = det.cmplt(Vec4::ZERO);
+        let t_raw = u * a.z + v * b.z + w * c.z;
+        let t_num = Vec4::select(flip, -t_raw, t_raw);
+        let den = det.abs();
+        let in_range = den.cmpgt(Vec4::ZERO)
+            & t_num.cmpge(Vec4::splat(t_min) * den)
+            & t_num.cmple(Vec4::splat(t_max) * den);
+        let mut mask = (in_range & !(negative & positive)).bitmask();
+        if mask == 0 {
+            return None;
+        }
+        let inv = Vec4::ONE / den;
+        let t = t_num * inv;
+        mask &= (t.abs().cmplt(Vec4::splat(f32::INFINITY))
+            & t.cmpge(Vec4::splat(t_min))
+            & t.cmple(Vec4::splat(t_max)))
+        .bitmask();
+        if mask == 0 {
+            return None;
+        }
+        let t = t.to_array();
+        let mut lane = mask.trailing_zeros() as usize;
+        mask &= mask - 1;
+        while mask != 0 {
+            let other = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            if t[other] < t[lane] {
+                lane = other;
+            }
+        }
+        let sign = if flip.test(lane) { -1.0 } else { 1.0 };
+        let inv = inv.to_array()[lane];
+        Some(PacketHit {
+            lane,
+            t: t[lane],
+            b1: (sign * v.to_array()[lane]) * inv,
+            b2: (sign * w.to_array()[lane]) * inv,
+        })
+    }
+}
+
+/// The edge functions `[u, v, w]` with those of the lanes in `lanes`
+/// recomputed in `f64` from the sheared vertices `[a, b, c]`.
+#[cold]
+#[inline(never)]
+fn edges_f64(lanes: u32, [a, b, c]: [&Sheared; 3], uvw: [Vec4; 3]) -> (Vec4, Vec4, Vec4) {
+    let coords = |s: &Sheared| [s.x.to_array(), s.y.to_array()];
+    let [a, b, c] = [coords(a), coords(b), coords(c)];
+    let mut uvw = uvw.map(|x| x.to_array());
+    for lane in (0..LANES).filter(|&l| lanes & (1 << l) != 0) {
+        let edge64 = |p: &[[f32; LANES]; 2], q: &[[f32; LANES]; 2]| {
+            (f64::from(p[0][lane]) * f64::from(q[1][lane])
+                - f64::from(p[1][lane]) * f64::from(q[0][lane])) as f32
+        };
+        uvw[0][lane] = edge64(&c, &b);
+        uvw[1][lane] = edge64(&a, &c);
+        uvw[2][lane] = edge64(&b, &a);
+    }
+    let [u, v, w] = uvw.map(Vec4::from_array);
+    (u, v, w)
+}
