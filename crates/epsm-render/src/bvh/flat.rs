@@ -32,7 +32,7 @@ use super::blas::SlotTriangles;
 use super::node::{BoxTest, ChildBoxes, TraceRay, exact_child_boxes};
 use super::packet::{LANES, TrianglePacket};
 
-/// Capacity of the traversal stack, in nodes.
+/// Capacity of the traversal stack, in nodes (a power of two).
 const STACK: usize = 128;
 
 /// One node: eight child boxes and what each child is.
@@ -69,8 +69,6 @@ pub(crate) struct FlatHit {
 pub(crate) struct FlatBvh {
     nodes: Vec<FlatNode>,
     packets: Vec<TrianglePacket>,
-    /// Per packet, the caller's id of each lane's triangle.
-    ids: Vec<[u32; LANES]>,
     /// Triangles in the packets.
     len: usize,
 }
@@ -80,7 +78,6 @@ impl FlatBvh {
     pub fn new(built: &SlotTriangles) -> Self {
         let boxes = exact_child_boxes(&built.bvh, |slot| built.triangles[slot as usize].aabb());
         let mut packets = Vec::new();
-        let mut ids = Vec::new();
         let mut nodes = Vec::with_capacity(built.bvh.nodes.len());
         for (node, children_boxes) in built.bvh.nodes.iter().zip(&boxes) {
             let mut children = [0u32; 8];
@@ -97,11 +94,11 @@ impl FlatBvh {
                 let (start, count) = node.child_primitives(child);
                 let range = start as usize..(start + count) as usize;
                 debug_assert!((1..=LANES).contains(&range.len()), "CWBVH leaf of {count}");
-                let mut lane_ids = [u32::MAX; LANES];
-                lane_ids[..range.len()].copy_from_slice(&built.ids[range.clone()]);
                 *slot = packets.len() as u32;
-                packets.push(TrianglePacket::new(&built.triangles[range]));
-                ids.push(lane_ids);
+                packets.push(TrianglePacket::new(
+                    &built.triangles[range.clone()],
+                    &built.ids[range],
+                ));
                 leaves |= 1 << child;
             }
             let present = std::array::from_fn(|child| !node.is_child_empty(child));
@@ -115,7 +112,6 @@ impl FlatBvh {
         Self {
             nodes,
             packets,
-            ids,
             len: built.triangles.len(),
         }
     }
@@ -127,9 +123,7 @@ impl FlatBvh {
 
     /// Approximate heap size in bytes.
     pub fn bytes(&self) -> usize {
-        self.nodes.len() * size_of::<FlatNode>()
-            + self.packets.len() * size_of::<TrianglePacket>()
-            + self.ids.len() * size_of::<[u32; LANES]>()
+        self.nodes.len() * size_of::<FlatNode>() + self.packets.len() * size_of::<TrianglePacket>()
     }
 
     /// The most stack entries a walk can hold at once (at most [`STACK`]
@@ -177,15 +171,14 @@ impl FlatBvh {
             while leaves != 0 {
                 let child = leaves.trailing_zeros() as usize;
                 leaves &= leaves - 1;
-                let packet = n.children[child] as usize;
-                let Some(hit) =
-                    self.packets[packet].intersect(ray.origin, &ray.shear, ray.t_min, ray.t_max)
+                let packet = &self.packets[n.children[child] as usize];
+                let Some(hit) = packet.intersect(ray.origin, &ray.shear, ray.t_min, ray.t_max)
                 else {
                     continue;
                 };
                 ray.t_max = hit.t;
                 best = Some(FlatHit {
-                    id: self.ids[packet][hit.lane],
+                    id: packet.id(hit.lane),
                     t: hit.t,
                     b1: hit.b1,
                     b2: hit.b2,
@@ -220,7 +213,9 @@ impl FlatBvh {
                 if depth == 0 {
                     return best;
                 }
-                depth -= 1;
+                // `depth ≤ STACK`, so the mask keeps `depth − 1` (and saves
+                // a bounds check).
+                depth = (depth - 1) & (STACK - 1);
                 // SAFETY: `depth` only grows right after a write at or below
                 // it, so every entry below the old `depth` has been written.
                 let (next, entry) = unsafe { stack[depth].assume_init() };
@@ -353,7 +348,8 @@ mod tests {
         let built = SlotTriangles::build(triangles(&mesh), BvhBuildParams::very_fast_build())
             .expect("triangles");
         for (k, chunk) in built.triangles.chunks(3).enumerate() {
-            let packet = TrianglePacket::new(chunk);
+            let ids: Vec<u32> = (0..chunk.len() as u32).collect();
+            let packet = TrianglePacket::new(chunk, &ids);
             for i in 0..40 {
                 // Rays aimed at a vertex, an edge point or inside.
                 let target = chunk[i % chunk.len()].vertices();

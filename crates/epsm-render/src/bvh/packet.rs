@@ -22,11 +22,14 @@ use super::triangle::{PackedTriangle, RayShear};
 /// Triangles per packet.
 pub(crate) const LANES: usize = 4;
 
-/// Up to [`LANES`] triangles, coordinates by vertex and axis.
+/// Up to [`LANES`] triangles, coordinates by vertex and axis, with the
+/// caller's id of each.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct TrianglePacket {
     /// `p[vertex][axis]`, lane `i` = triangle `i` (NaN in unused lanes).
     p: [[Vec4; 3]; 3],
+    /// The id of each lane's triangle (`u32::MAX` in unused lanes).
+    ids: [u32; LANES],
 }
 
 /// The closest hit in a packet.
@@ -52,9 +55,13 @@ struct Sheared {
 }
 
 impl TrianglePacket {
-    /// The packet of `triangles` (one to [`LANES`]) in lane order.
-    pub fn new(triangles: &[PackedTriangle]) -> Self {
+    /// The packet of `triangles` (one to [`LANES`]) in lane order, with
+    /// their `ids` (as many).
+    pub fn new(triangles: &[PackedTriangle], ids: &[u32]) -> Self {
         debug_assert!((1..=LANES).contains(&triangles.len()));
+        debug_assert_eq!(triangles.len(), ids.len());
+        let mut lane_ids = [u32::MAX; LANES];
+        lane_ids[..ids.len()].copy_from_slice(ids);
         let mut p = [[[f32::NAN; LANES]; 3]; 3];
         for (lane, triangle) in triangles.iter().enumerate() {
             for (vertex, v) in triangle.vertices().iter().enumerate() {
@@ -65,7 +72,14 @@ impl TrianglePacket {
         }
         Self {
             p: p.map(|v| v.map(Vec4::from_array)),
+            ids: lane_ids,
         }
+    }
+
+    /// The id of the triangle in `lane`.
+    #[inline(always)]
+    pub fn id(&self, lane: usize) -> u32 {
+        self.ids[lane % LANES]
     }
 
     /// The closest hit of the ray `origin + t·dir` (`dir` given by its
@@ -78,7 +92,8 @@ impl TrianglePacket {
         t_min: f32,
         t_max: f32,
     ) -> Option<PacketHit> {
-        let [kx, ky, kz] = shear.axes;
+        // Clamped (a no-op) so that the loads below need no bounds checks.
+        let [kx, ky, kz] = shear.axes.map(|k| k.min(2));
         let o = origin.to_array();
         let (ox, oy, oz) = (Vec4::splat(o[kx]), Vec4::splat(o[ky]), Vec4::splat(o[kz]));
         let [nsx, nsy, sz] = shear.kz_col.map(Vec4::splat);

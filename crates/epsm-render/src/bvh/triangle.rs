@@ -48,7 +48,8 @@ impl RayShear {
         let kz = usize::from(!x_largest) + usize::from(!x_largest & !y_ge_z);
         let d = dir.to_array();
         let dz = d[kz];
-        let [kx, ky] = AXES_ACROSS[2 * kz + usize::from(dz < 0.0)];
+        // Clamped (a no-op) so that the loads below need no bounds checks.
+        let [kx, ky] = AXES_ACROSS[2 * kz + usize::from(dz < 0.0)].map(|k| k.min(2));
         // `S = dir[k]·sz`, as the paper rounds it.
         let sz = 1.0 / dz;
         Self {
