@@ -11,7 +11,9 @@
 //! recomputed in `f64` for that lane, as there. Unused lanes hold NaN
 //! vertices, which every range test fails.
 //!
-//! Of several lanes hit, the closest wins; among equal `t`, the lowest lane.
+//! Each lane carries the bit of the node child its triangle belongs to, so a
+//! walk tests only the lanes of the children whose boxes the ray enters. Of
+//! several lanes hit, the closest wins; among equal `t`, the lowest lane.
 //!
 //! No parameters.
 
@@ -30,6 +32,9 @@ pub(crate) struct TrianglePacket {
     p: [[Vec4; 3]; 3],
     /// The id of each lane's triangle (`u32::MAX` in unused lanes).
     ids: [u32; LANES],
+    /// Byte `i`: the caller's child bit of lane `i`'s triangle (the node's
+    /// leaf child it belongs to; 0 in unused lanes).
+    children: u32,
 }
 
 /// The closest hit in a packet.
@@ -56,10 +61,13 @@ struct Sheared {
 
 impl TrianglePacket {
     /// The packet of `triangles` (one to [`LANES`]) in lane order, with
-    /// their `ids` (as many).
-    pub fn new(triangles: &[PackedTriangle], ids: &[u32]) -> Self {
+    /// their `ids` and child bits `children` (as many).
+    pub fn new(triangles: &[PackedTriangle], ids: &[u32], children: &[u8]) -> Self {
         debug_assert!((1..=LANES).contains(&triangles.len()));
         debug_assert_eq!(triangles.len(), ids.len());
+        debug_assert_eq!(triangles.len(), children.len());
+        let mut lane_children = [0u8; LANES];
+        lane_children[..children.len()].copy_from_slice(children);
         let mut lane_ids = [u32::MAX; LANES];
         lane_ids[..ids.len()].copy_from_slice(ids);
         let mut p = [[[f32::NAN; LANES]; 3]; 3];
@@ -73,7 +81,20 @@ impl TrianglePacket {
         Self {
             p: p.map(|v| v.map(Vec4::from_array)),
             ids: lane_ids,
+            children: u32::from_le_bytes(lane_children),
         }
+    }
+
+    /// The lanes (bit `i` for lane `i`) whose triangles belong to a child in
+    /// `children` (bit `c` for child `c`).
+    #[inline(always)]
+    pub fn lanes_of(&self, children: u32) -> u32 {
+        // Per byte: nonzero → bit 7 set (no carries between bytes).
+        let x = self.children & (children * 0x0101_0101);
+        let high = (((x & 0x7f7f_7f7f) + 0x7f7f_7f7f) | x) & 0x8080_8080;
+        // Bits 7, 15, 23, 31 to bits 21..25 by one multiply (the shifted
+        // copies land on distinct bits, so nothing carries).
+        ((high >> 7).wrapping_mul(0x0020_4081) >> 21) & 0xf
     }
 
     /// The id of the triangle in `lane`.
@@ -83,7 +104,8 @@ impl TrianglePacket {
     }
 
     /// The closest hit of the ray `origin + t·dir` (`dir` given by its
-    /// `shear`) with `t` in `[t_min, t_max]`, if any lane has one.
+    /// `shear`) with `t` in `[t_min, t_max]`, if any lane in `lanes` (bit
+    /// `i` for lane `i`) has one.
     #[inline(always)]
     pub fn intersect(
         &self,
@@ -91,6 +113,7 @@ impl TrianglePacket {
         shear: &RayShear,
         t_min: f32,
         t_max: f32,
+        lanes: u32,
     ) -> Option<PacketHit> {
         // Clamped (a no-op) so that the loads below need no bounds checks.
         let [kx, ky, kz] = shear.axes.map(|k| k.min(2));
@@ -129,7 +152,7 @@ impl TrianglePacket {
         let in_range = den.cmpgt(Vec4::ZERO)
             & t_num.cmpge(Vec4::splat(t_min) * den)
             & t_num.cmple(Vec4::splat(t_max) * den);
-        let mut mask = (in_range & !(negative & positive)).bitmask();
+        let mut mask = (in_range & !(negative & positive)).bitmask() & lanes;
         if mask == 0 {
             return None;
         }
