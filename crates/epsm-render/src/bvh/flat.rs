@@ -291,8 +291,14 @@ mod tests {
         mesh
     }
 
-    fn triangles(mesh: &Mesh) -> impl Iterator<Item = (u32, [Vec3A; 3])> + '_ {
-        (0..mesh.len() as u32).map(|tri| (tri, mesh.triangle(tri).map(Vec3A::from)))
+    /// The obvhs build (`very_fast_build`) of a [`soup`] of `count`, and how
+    /// many triangles the soup has (degenerate ones included).
+    fn built_soup(rng: &mut Rng, count: usize) -> (SlotTriangles, usize) {
+        let mesh = soup(rng, count);
+        let triangles =
+            (0..mesh.len() as u32).map(|tri| (tri, mesh.triangle(tri).map(Vec3A::from)));
+        let built = SlotTriangles::build(triangles, BvhBuildParams::very_fast_build());
+        (built.expect("triangles"), mesh.len())
     }
 
     fn random_ray(rng: &mut Rng, i: usize) -> TraceRay {
@@ -316,11 +322,9 @@ mod tests {
     #[test]
     fn flat_walk_matches_obvhs_walk_and_brute_force() {
         let mut rng = Rng::new(5);
-        let mesh = soup(&mut rng, 4000);
-        let built = SlotTriangles::build(triangles(&mesh), BvhBuildParams::very_fast_build())
-            .expect("triangles");
+        let (built, soup_len) = built_soup(&mut rng, 4000);
         let flat = FlatBvh::new(&built);
-        assert!(flat.len() < mesh.len(), "degenerate triangles left out");
+        assert!(flat.len() < soup_len, "degenerate triangles left out");
         assert!(flat.stack_need() <= STACK, "{}", flat.stack_need());
         let (mut hits, mut compared) = (0, 0);
         for i in 0..20_000 {
@@ -369,9 +373,7 @@ mod tests {
     #[test]
     fn lanes_of_children() {
         let mut rng = Rng::new(3);
-        let mesh = soup(&mut rng, 10);
-        let built = SlotTriangles::build(triangles(&mesh), BvhBuildParams::very_fast_build())
-            .expect("triangles");
+        let (built, _) = built_soup(&mut rng, 10);
         for bits in [[1u8, 1, 2, 128], [4, 8, 8, 16], [64, 128, 1, 2]] {
             let packet = TrianglePacket::new(&built.triangles[..4], &[0, 1, 2, 3], &bits);
             for children in 0..256u32 {
@@ -394,9 +396,7 @@ mod tests {
     #[test]
     fn packet_lanes_match_scalar_test() {
         let mut rng = Rng::new(9);
-        let mesh = soup(&mut rng, 400);
-        let built = SlotTriangles::build(triangles(&mesh), BvhBuildParams::very_fast_build())
-            .expect("triangles");
+        let (built, _) = built_soup(&mut rng, 400);
         for (k, chunk) in built.triangles.chunks(3).enumerate() {
             let ids: Vec<u32> = (0..chunk.len() as u32).collect();
             let packet = TrianglePacket::new(chunk, &ids, &[1; LANES][..chunk.len()]);
