@@ -38,6 +38,7 @@
 //! ```
 
 mod anderson;
+mod coarse;
 mod dual;
 mod pass;
 
@@ -84,13 +85,15 @@ pub struct SinkhornSettings {
     pub cluster_size: usize,
     /// The coarse phase runs while `√ε` exceeds this many mean cluster radii.
     pub jump_radii: f64,
+    /// Fine-phase updates between two coarse corrections (0: none); see `coarse`.
+    pub coarse_period: usize,
 }
 
 impl Default for SinkhornSettings {
     fn default() -> Self {
         Self {
             blur: 0.01,
-            scaling: 0.9,
+            scaling: 0.5,
             debias: false,
             truncation: 30.0,
             marginal_tolerance: 1e-3,
@@ -98,11 +101,12 @@ impl Default for SinkhornSettings {
             overrelaxation: 1.0,
             anderson_memory: 8,
             max_scale_iterations: 30,
-            scale_tolerance: 3e-3,
+            scale_tolerance: 1e-2,
             annealing_overrelaxation: 1.5,
-            exact_prices: true,
+            exact_prices: false,
             cluster_size: 32,
             jump_radii: 2.0,
+            coarse_period: 1,
         }
     }
 }

@@ -22,7 +22,7 @@ use rayon::prelude::*;
 
 use super::SinkhornSettings;
 use super::anderson::Anderson;
-use super::pass::{Level, coarse_cloud, softmin};
+use super::pass::{Level, coarse_cloud, softmin, softmin_blocks};
 use crate::blocks::{Clustered, Support, fit_potentials};
 use crate::plan::PhaseTimes;
 
@@ -189,14 +189,51 @@ pub(crate) fn solve_dual(
     let fine_start = std::time::Instant::now();
     for &eps in &eps_list[next..] {
         let sup = lp.support(&f, &g, eps);
-        for _ in 0..settings.max_scale_iterations {
+        for it in 0..settings.max_scale_iterations {
+            let t0 = std::time::Instant::now();
+            let omega = settings.annealing_overrelaxation;
+            if settings.coarse_period > 0 && it == 0 {
+                // ε changed: correct the current plan before the first update of the scale.
+                let pass = softmin_blocks(&fx, &fy, &sup.rows, &g, eps, |i, _| f[i]);
+                super::coarse::correct(&fx, &fy, &sup.rows, &pass.log_masses, &mut f, &mut g, eps);
+                lp.pairs += pass.pairs;
+            }
             let (ft, p1) = softmin(&fx, &fy, &sup.rows, &g, eps);
             let err = row_marginal_error(&f, &ft, eps);
-            relax(&mut f, &ft, settings.annealing_overrelaxation);
-            let (gt, p2) = softmin(&fy, &fx, &sup.cols, &f, eps);
-            relax(&mut g, &gt, settings.annealing_overrelaxation);
+            relax(&mut f, &ft, omega);
+            let p2 = if settings.coarse_period > 0 && it % settings.coarse_period == 0 {
+                // The target update also gives the block masses; correct before the next source update.
+                let pass = softmin_blocks(&fy, &fx, &sup.cols, &f, eps, |j, t| {
+                    g[j] + omega * (t - g[j])
+                });
+                relax(&mut g, &pass.softmin, omega);
+                let updates = super::coarse::correct(
+                    &fy,
+                    &fx,
+                    &sup.cols,
+                    &pass.log_masses,
+                    &mut g,
+                    &mut f,
+                    eps,
+                );
+                if std::env::var_os("EPSM_OT_TRACE").is_some() {
+                    eprintln!("  correction eps={eps:.3e} scaling_updates={updates:?}");
+                }
+                pass.pairs
+            } else {
+                let (gt, p2) = softmin(&fy, &fx, &sup.cols, &f, eps);
+                relax(&mut g, &gt, omega);
+                p2
+            };
+            let tsoft = t0.elapsed().as_secs_f64();
             lp.pairs += p1 + p2;
             lp.iterations += 1;
+            if std::env::var_os("EPSM_OT_TRACE").is_some() {
+                eprintln!(
+                    "fine eps={eps:.3e} it={it} err={err:.3e} support_pairs={} upd {tsoft:.4}s",
+                    p1
+                );
+            }
             if err <= settings.scale_tolerance {
                 break;
             }
@@ -242,6 +279,9 @@ pub(crate) fn polish(
         lp.pairs += p1 + p2;
         lp.iterations += 1;
         marginal_error = row_marginal_error(&f, &ft, eps);
+        if std::env::var_os("EPSM_OT_TRACE").is_some() {
+            eprintln!("polish round={round} err={marginal_error:.3e}");
+        }
         if marginal_error <= settings.marginal_tolerance {
             break;
         }
