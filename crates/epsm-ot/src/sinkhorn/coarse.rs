@@ -203,3 +203,87 @@ fn scale(
     }
     None
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::pass::softmin_blocks;
+    use super::*;
+    use crate::SinkhornSettings;
+    use crate::blocks::{Clustered, Support, fit_potentials};
+    use crate::cost::diameter_sq;
+    use crate::sinkhorn::solve_dual;
+    use crate::synthetic::blobs_pair;
+
+    /// L1 distances of the plan's source and target cluster marginals from the clouds' cluster masses.
+    fn cluster_marginal_errors(
+        x: &Level,
+        y: &Level,
+        sup: &Support,
+        f: &[f64],
+        g: &[f64],
+        eps: f64,
+    ) -> (f64, f64) {
+        let pass = softmin_blocks(x, y, &sup.rows, g, eps, |i, _| f[i]);
+        let (a, b) = (cluster_log_masses(x), cluster_log_masses(y));
+        let mut cols = vec![0.0; b.len()];
+        let mut row_error = 0.0;
+        for ((masses, list), la) in pass.log_masses.iter().zip(&sup.rows).zip(&a) {
+            row_error += (masses.iter().map(|m| m.exp()).sum::<f64>() - la.exp()).abs();
+            for (m, &j) in masses.iter().zip(list) {
+                cols[j as usize] += m.exp();
+            }
+        }
+        let col_error = cols
+            .iter()
+            .zip(&b)
+            .map(|(c, lb)| (c - lb.exp()).abs())
+            .sum();
+        (row_error, col_error)
+    }
+
+    #[test]
+    fn correction_makes_the_cluster_marginals_exact() {
+        let (s, t) = blobs_pair(1024, 3).unwrap_or_else(|| panic!("fixture"));
+        let (cx, cy) = (Clustered::new(&s, 32), Clustered::new(&t, 32));
+        let (x, y) = (Level::fine(&cx), Level::fine(&cy));
+        let blur = 0.05;
+        let eps = blur * blur;
+        // Converged potentials plus a smooth tilt: a large-scale imbalance of the kind
+        // plain updates at small ε remove slowly.
+        let settings = SinkhornSettings {
+            blur,
+            ..SinkhornSettings::default()
+        };
+        let dual = solve_dual(&cx, &cy, diameter_sq(&s, &t), &settings);
+        let tilt = |i: usize| 0.5 * eps * f64::from(cx.cloud.point(i)[3]);
+        let mut f: Vec<f64> = dual
+            .f
+            .iter()
+            .enumerate()
+            .map(|(i, v)| v + tilt(i))
+            .collect();
+        let mut g = dual.g;
+        let sup = Support::truncated(
+            &cx,
+            &fit_potentials(&cx, &f),
+            &cy,
+            &fit_potentials(&cy, &g),
+            settings.truncation * eps,
+        );
+        let (row0, col0) = cluster_marginal_errors(&x, &y, &sup, &f, &g, eps);
+        assert!(
+            row0 > 0.05 && col0 > 0.05,
+            "not a test: errors {row0}, {col0}"
+        );
+        let pass = softmin_blocks(&x, &y, &sup.rows, &g, eps, |i, _| f[i]);
+        let outcome = correct(&x, &y, &sup.rows, &pass.log_masses, &mut f, &mut g, eps);
+        assert!(matches!(outcome, Correction::Applied { .. }), "{outcome:?}");
+        let (row, col) = cluster_marginal_errors(&x, &y, &sup, &f, &g, eps);
+        // Rows to the scaling tolerance; columns exact up to f32 kernel rounding.
+        assert!(
+            row <= 1.5 * SCALING_TOLERANCE,
+            "source cluster marginals off by {row}"
+        );
+        assert!(col <= 1e-5, "target cluster marginals off by {col}");
+    }
+}
