@@ -143,7 +143,7 @@ impl SinkhornSettings {
 
     /// Plain ε-scaling Sinkhorn (GeomLoss's loop plus the marginal polish): no
     /// coarse correction, no exact warm start, scaling 0.9. A reference for the
-    /// default path (same fixed point), several times slower at small blur.
+    /// default path (same fixed point).
     ///
     /// Up to 300 updates per fine scale: the coarse-to-fine jump leaves a
     /// slow large-scale error that 30 updates per scale do not remove, and
