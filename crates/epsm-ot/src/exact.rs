@@ -76,10 +76,12 @@ impl Default for ExactSettings {
             tolerance: 1e-11,
             warm_start: SinkhornSettings {
                 blur: 0.03,
+                scaling: 0.9,
                 marginal_tolerance: 1e-2,
                 max_polish_iterations: 10,
                 max_scale_iterations: 1,
                 annealing_overrelaxation: 1.0,
+                coarse_period: 0,
                 ..SinkhornSettings::default()
             },
             auction_start: 1e-2,

@@ -11,7 +11,8 @@
 //! The one portable body is compiled three times: plain x86-64 (SSE2), AVX2 +
 //! FMA (8 lanes) and AVX-512 F/BW/DQ/VL (16 lanes); [`stream_row`] picks the
 //! widest the running CPU supports (runtime detection, so the binary still
-//! runs on any x86-64). The paths compute the same operations in the same
+//! runs on any x86-64). [`stream_blocks`] is the same pass with one sum per
+//! target range instead of one per row. The paths compute the same operations in the same
 //! order (no reassociation, no FMA contraction), so they agree to rounding.
 
 use std::ops::Range;
@@ -88,6 +89,26 @@ impl RowSum {
     }
 }
 
+/// Where a streamed row goes: one running sum over all ranges, or one sum per block.
+pub(crate) enum Sink<'a, 'b> {
+    /// Accumulate every range into one [`RowSum`].
+    Row(&'a mut RowSum),
+    /// One sum per block of consecutive targets (the block masses of the coarse correction).
+    Blocks(&'a mut BlockSums<'b>),
+}
+
+/// Per-block sums of one row, all relative to the row's largest score.
+pub(crate) struct BlockSums<'a> {
+    /// Lengths of the blocks, in order; together they are the streamed ranges.
+    pub lens: &'a [u32],
+    /// Scratch for the row's scores: at least the blocks' total length rounded up to 16.
+    pub scores: &'a mut [f32],
+    /// `out[k] = Σ_{j ∈ block k} exp(score_j − max)`.
+    pub out: &'a mut [f32],
+    /// The row's largest score (`−∞` if there is none).
+    pub max: f32,
+}
+
 /// Streams the targets in `ranges` against the point `x`.
 ///
 /// Scores are `lw_j + (g_j − c(x, y_j))·inv_eps`: the potential and the cost are
@@ -103,6 +124,36 @@ pub(crate) fn stream_row<const MOMENTS: bool>(
     ranges: &[Range<usize>],
     acc: &mut RowSum,
 ) -> u64 {
+    stream::<MOMENTS>(x, y, lw, g, inv_eps, ranges, Sink::Row(acc))
+}
+
+/// [`stream_row`] with one sum per block (`sums.lens`) of the targets in `ranges`.
+///
+/// Scores are written to `sums.scores`, then exponentiated relative to their
+/// maximum and summed block by block, so short blocks cost no more per pair
+/// than one long range.
+pub(crate) fn stream_blocks(
+    x: &Point,
+    y: &[Vec<f32>; DIM],
+    lw: &[f32],
+    g: &[f32],
+    inv_eps: f32,
+    ranges: &[Range<usize>],
+    sums: &mut BlockSums,
+) -> u64 {
+    stream::<false>(x, y, lw, g, inv_eps, ranges, Sink::Blocks(sums))
+}
+
+/// Picks the widest SIMD body the running CPU supports.
+fn stream<const MOMENTS: bool>(
+    x: &Point,
+    y: &[Vec<f32>; DIM],
+    lw: &[f32],
+    g: &[f32],
+    inv_eps: f32,
+    ranges: &[Range<usize>],
+    sink: Sink,
+) -> u64 {
     #[cfg(target_arch = "x86_64")]
     {
         if std::arch::is_x86_feature_detected!("avx512f")
@@ -111,56 +162,119 @@ pub(crate) fn stream_row<const MOMENTS: bool>(
             && std::arch::is_x86_feature_detected!("avx512vl")
         {
             #[allow(unsafe_code)]
-            // SAFETY: `stream_row_avx512` only requires the four AVX-512 subsets it is
+            // SAFETY: `stream_avx512` only requires the four AVX-512 subsets it is
             // compiled for, all detected on the running CPU just above; it has no other
             // precondition (it is the same safe code compiled for 512-bit registers).
-            return unsafe { stream_row_avx512::<MOMENTS>(x, y, lw, g, inv_eps, ranges, acc) };
+            return unsafe { stream_avx512::<MOMENTS>(x, y, lw, g, inv_eps, ranges, sink) };
         }
         if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
         {
             #[allow(unsafe_code)]
-            // SAFETY: `stream_row_avx2` only requires AVX2 and FMA, both detected on the
+            // SAFETY: `stream_avx2` only requires AVX2 and FMA, both detected on the
             // running CPU just above; it has no other precondition (it is the same safe
             // code compiled for 256-bit registers).
-            return unsafe { stream_row_avx2::<MOMENTS>(x, y, lw, g, inv_eps, ranges, acc) };
+            return unsafe { stream_avx2::<MOMENTS>(x, y, lw, g, inv_eps, ranges, sink) };
         }
     }
-    stream_row_portable::<MOMENTS>(x, y, lw, g, inv_eps, ranges, acc)
+    stream_portable::<MOMENTS>(x, y, lw, g, inv_eps, ranges, sink)
 }
 
-/// [`stream_row_portable`] compiled for 512-bit AVX-512 registers (selected at run time).
+/// [`stream_portable`] compiled for 512-bit AVX-512 registers (selected at run time).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx512bw,avx512dq,avx512vl")]
-fn stream_row_avx512<const MOMENTS: bool>(
+fn stream_avx512<const MOMENTS: bool>(
     x: &Point,
     y: &[Vec<f32>; DIM],
     lw: &[f32],
     g: &[f32],
     inv_eps: f32,
     ranges: &[Range<usize>],
-    acc: &mut RowSum,
+    sink: Sink,
 ) -> u64 {
-    stream_row_portable::<MOMENTS>(x, y, lw, g, inv_eps, ranges, acc)
+    stream_portable::<MOMENTS>(x, y, lw, g, inv_eps, ranges, sink)
 }
 
-/// [`stream_row_portable`] compiled for 256-bit AVX2 registers (selected at run time).
+/// [`stream_portable`] compiled for 256-bit AVX2 registers (selected at run time).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-fn stream_row_avx2<const MOMENTS: bool>(
+fn stream_avx2<const MOMENTS: bool>(
     x: &Point,
     y: &[Vec<f32>; DIM],
     lw: &[f32],
     g: &[f32],
     inv_eps: f32,
     ranges: &[Range<usize>],
-    acc: &mut RowSum,
+    sink: Sink,
 ) -> u64 {
-    stream_row_portable::<MOMENTS>(x, y, lw, g, inv_eps, ranges, acc)
+    stream_portable::<MOMENTS>(x, y, lw, g, inv_eps, ranges, sink)
 }
 
-/// The portable body of [`stream_row`] (SSE2 on any x86_64).
+/// The portable body of [`stream_row`] and [`stream_blocks`] (SSE2 on any x86_64).
 #[inline(always)]
-fn stream_row_portable<const MOMENTS: bool>(
+fn stream_portable<const MOMENTS: bool>(
+    x: &Point,
+    y: &[Vec<f32>; DIM],
+    lw: &[f32],
+    g: &[f32],
+    inv_eps: f32,
+    ranges: &[Range<usize>],
+    sink: Sink,
+) -> u64 {
+    let mut scratch = Scratch {
+        scores: [f32::NEG_INFINITY; BLOCK],
+        costs: [0.0; BLOCK],
+        weights: [0.0; BLOCK],
+    };
+    // Plain loops, no closures or iterator adapters: those are separate generic
+    // functions that would not inherit the caller's SIMD target features.
+    let mut pairs = 0;
+    match sink {
+        Sink::Row(acc) if !MOMENTS => pairs = gathered_sum(x, y, lw, g, inv_eps, ranges, acc),
+        Sink::Row(acc) => {
+            for r in ranges {
+                pairs += push_range::<MOMENTS>(x, y, lw, g, inv_eps, r.clone(), acc, &mut scratch);
+            }
+        }
+        Sink::Blocks(sums) => pairs = block_sums(x, y, lw, g, inv_eps, ranges, sums),
+    }
+    pairs
+}
+
+/// Scores `lw_j + (g_j − c(x, y_j))·inv_eps` of the targets `range` into `out` (as long as `range`).
+#[inline(always)]
+fn score_into(
+    x: &Point,
+    y: &[Vec<f32>; DIM],
+    lw: &[f32],
+    g: &[f32],
+    inv_eps: f32,
+    range: Range<usize>,
+    out: &mut [f32],
+) {
+    let (c0, c1, c2, c3, c4) = (
+        &y[0][range.clone()],
+        &y[1][range.clone()],
+        &y[2][range.clone()],
+        &y[3][range.clone()],
+        &y[4][range.clone()],
+    );
+    let (lws, gs) = (&lw[range.clone()], &g[range]);
+    for k in 0..out.len() {
+        let d0 = x[0] - c0[k];
+        let d1 = x[1] - c1[k];
+        let d2 = x[2] - c2[k];
+        let d3 = x[3] - c3[k];
+        let d4 = x[4] - c4[k];
+        let c = d0 * d0 + d1 * d1 + d2 * d2 + d3 * d3 + d4 * d4;
+        out[k] = lws[k] + (gs[k] - c) * inv_eps;
+    }
+}
+
+/// [`stream_row`] without moments: scores of consecutive ranges fill one
+/// [`BLOCK`]-long buffer, reduced (maximum, exponentials, sum) once it is
+/// full, so many short ranges cost no more per pair than one long one.
+#[inline(always)]
+fn gathered_sum(
     x: &Point,
     y: &[Vec<f32>; DIM],
     lw: &[f32],
@@ -170,68 +284,183 @@ fn stream_row_portable<const MOMENTS: bool>(
     acc: &mut RowSum,
 ) -> u64 {
     let mut scores = [f32::NEG_INFINITY; BLOCK];
-    let mut costs = [0.0f32; BLOCK];
-    let mut pairs = 0u64;
+    let mut fill = 0;
+    let mut pairs = 0;
     for range in ranges {
         let mut start = range.start;
         while start < range.end {
-            let len = (range.end - start).min(BLOCK);
-            pairs += len as u64;
-            let padded = len.div_ceil(LANES) * LANES;
-            let (c0, c1, c2, c3, c4) = (
-                &y[0][start..start + len],
-                &y[1][start..start + len],
-                &y[2][start..start + len],
-                &y[3][start..start + len],
-                &y[4][start..start + len],
+            let len = (range.end - start).min(BLOCK - fill);
+            score_into(
+                x,
+                y,
+                lw,
+                g,
+                inv_eps,
+                start..start + len,
+                &mut scores[fill..fill + len],
             );
-            let (lws, gs) = (&lw[start..start + len], &g[start..start + len]);
-            let (sc, cc) = (&mut scores[..len], &mut costs[..len]);
-            for k in 0..len {
-                let d0 = x[0] - c0[k];
-                let d1 = x[1] - c1[k];
-                let d2 = x[2] - c2[k];
-                let d3 = x[3] - c3[k];
-                let d4 = x[4] - c4[k];
-                let c = d0 * d0 + d1 * d1 + d2 * d2 + d3 * d3 + d4 * d4;
-                if MOMENTS {
-                    cc[k] = c;
-                }
-                sc[k] = lws[k] + (gs[k] - c) * inv_eps;
-            }
-            scores[len..padded].fill(f32::NEG_INFINITY);
-            let block_max = lane_max(&scores[..padded]);
-            acc.rescale_to(block_max);
-            if acc.max == f32::NEG_INFINITY {
-                start += len;
-                continue;
-            }
-            let m = acc.max;
-            let mut weights = [0.0f32; BLOCK];
-            for (w, &sc) in weights[..padded].iter_mut().zip(&scores[..padded]) {
-                *w = exp_nonpositive(sc - m);
-            }
-            acc.sum += f64::from(lane_sum(&weights[..padded]));
-            if MOMENTS {
-                let ys = [c0, c1, c2, c3, c4];
-                let mut mom = [0.0f32; DIM + 1];
-                for k in 0..len {
-                    for d in 0..DIM {
-                        mom[d] += weights[k] * ys[d][k];
-                    }
-                    mom[DIM] += weights[k] * costs[k];
-                }
-                for (a, b) in acc.moments.iter_mut().zip(mom) {
-                    *a += f64::from(b);
-                }
-            }
+            fill += len;
             start += len;
+            if fill == BLOCK {
+                reduce_scores(&mut scores, acc);
+                fill = 0;
+            }
         }
+        pairs += range.len() as u64;
+    }
+    if fill > 0 {
+        let padded = fill.div_ceil(LANES) * LANES;
+        scores[fill..padded].fill(f32::NEG_INFINITY);
+        reduce_scores(&mut scores[..padded], acc);
     }
     pairs
 }
 
+/// Adds `Σ exp(score)` of a buffer whose length is a multiple of [`LANES`] to `acc` (the buffer is overwritten).
+#[inline(always)]
+fn reduce_scores(scores: &mut [f32], acc: &mut RowSum) {
+    acc.rescale_to(lane_max(scores));
+    if acc.max == f32::NEG_INFINITY {
+        return;
+    }
+    let m = acc.max;
+    for s in scores.iter_mut() {
+        *s = exp_nonpositive(*s - m);
+    }
+    acc.sum += f64::from(lane_sum(scores));
+}
+
+/// The body of [`stream_blocks`]: scores, their maximum, weights, then one sum per block.
+#[inline(always)]
+fn block_sums(
+    x: &Point,
+    y: &[Vec<f32>; DIM],
+    lw: &[f32],
+    g: &[f32],
+    inv_eps: f32,
+    ranges: &[Range<usize>],
+    sums: &mut BlockSums,
+) -> u64 {
+    let mut len = 0;
+    for range in ranges {
+        score_into(
+            x,
+            y,
+            lw,
+            g,
+            inv_eps,
+            range.clone(),
+            &mut sums.scores[len..len + range.len()],
+        );
+        len += range.len();
+    }
+    let padded = len.div_ceil(LANES) * LANES;
+    let scores = &mut sums.scores[..padded];
+    scores[len..].fill(f32::NEG_INFINITY);
+    let m = lane_max(scores);
+    sums.max = m;
+    if m == f32::NEG_INFINITY {
+        sums.out.fill(0.0);
+        return len as u64;
+    }
+    for s in scores.iter_mut() {
+        *s = exp_nonpositive(*s - m);
+    }
+    let mut start = 0;
+    for (o, &l) in sums.out.iter_mut().zip(sums.lens) {
+        let end = start + l as usize;
+        let mut t = 0.0f32;
+        for &w in &scores[start..end] {
+            t += w;
+        }
+        *o = t;
+        start = end;
+    }
+    len as u64
+}
+
+/// Per-block buffers of a streamed row.
+struct Scratch {
+    scores: [f32; BLOCK],
+    costs: [f32; BLOCK],
+    weights: [f32; BLOCK],
+}
+
+/// Streams one range of targets into `acc`, in blocks of [`BLOCK`]; returns its length.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn push_range<const MOMENTS: bool>(
+    x: &Point,
+    y: &[Vec<f32>; DIM],
+    lw: &[f32],
+    g: &[f32],
+    inv_eps: f32,
+    range: Range<usize>,
+    acc: &mut RowSum,
+    scratch: &mut Scratch,
+) -> u64 {
+    let Scratch {
+        scores,
+        costs,
+        weights,
+    } = scratch;
+    let mut start = range.start;
+    while start < range.end {
+        let len = (range.end - start).min(BLOCK);
+        let padded = len.div_ceil(LANES) * LANES;
+        let (c0, c1, c2, c3, c4) = (
+            &y[0][start..start + len],
+            &y[1][start..start + len],
+            &y[2][start..start + len],
+            &y[3][start..start + len],
+            &y[4][start..start + len],
+        );
+        let (lws, gs) = (&lw[start..start + len], &g[start..start + len]);
+        let (sc, cc) = (&mut scores[..len], &mut costs[..len]);
+        for k in 0..len {
+            let d0 = x[0] - c0[k];
+            let d1 = x[1] - c1[k];
+            let d2 = x[2] - c2[k];
+            let d3 = x[3] - c3[k];
+            let d4 = x[4] - c4[k];
+            let c = d0 * d0 + d1 * d1 + d2 * d2 + d3 * d3 + d4 * d4;
+            if MOMENTS {
+                cc[k] = c;
+            }
+            sc[k] = lws[k] + (gs[k] - c) * inv_eps;
+        }
+        scores[len..padded].fill(f32::NEG_INFINITY);
+        let block_max = lane_max(&scores[..padded]);
+        acc.rescale_to(block_max);
+        if acc.max == f32::NEG_INFINITY {
+            start += len;
+            continue;
+        }
+        let m = acc.max;
+        for (w, &sc) in weights[..padded].iter_mut().zip(&scores[..padded]) {
+            *w = exp_nonpositive(sc - m);
+        }
+        acc.sum += f64::from(lane_sum(&weights[..padded]));
+        if MOMENTS {
+            let ys = [c0, c1, c2, c3, c4];
+            let mut mom = [0.0f32; DIM + 1];
+            for k in 0..len {
+                for d in 0..DIM {
+                    mom[d] += weights[k] * ys[d][k];
+                }
+                mom[DIM] += weights[k] * costs[k];
+            }
+            for (a, b) in acc.moments.iter_mut().zip(mom) {
+                *a += f64::from(b);
+            }
+        }
+        start += len;
+    }
+    range.len() as u64
+}
+
 /// Sum of a slice whose length is a multiple of [`LANES`], in vectorisable lanes (fixed order).
+#[inline(always)]
 fn lane_sum(values: &[f32]) -> f32 {
     let mut lanes = [0.0f32; LANES];
     for chunk in values.chunks_exact(LANES) {
@@ -243,6 +472,7 @@ fn lane_sum(values: &[f32]) -> f32 {
 }
 
 /// Maximum of a slice whose length is a multiple of [`LANES`], in vectorisable lanes.
+#[inline(always)]
 fn lane_max(values: &[f32]) -> f32 {
     let mut lanes = [f32::NEG_INFINITY; LANES];
     for chunk in values.chunks_exact(LANES) {
@@ -290,7 +520,7 @@ mod tests {
             let ranges = [0..split, split..n];
             let (mut a, mut b) = (RowSum::new(), RowSum::new());
             let pa = stream_row::<true>(&x, &y, &lw, &g, inv_eps, &ranges, &mut a);
-            let pb = stream_row_portable::<true>(&x, &y, &lw, &g, inv_eps, &ranges, &mut b);
+            let pb = stream_portable::<true>(&x, &y, &lw, &g, inv_eps, &ranges, Sink::Row(&mut b));
             assert_eq!(pa, pb);
             let (la, lb) = (a.log_sum(), b.log_sum());
             assert!(

@@ -18,32 +18,68 @@ fn solve(s: &PointCloud, t: &PointCloud, settings: &SinkhornSettings) -> OtResul
 }
 
 #[test]
-fn annealed_preset_runs_pure_eps_scaling_to_the_same_plan() {
+fn default_annealed_and_exact_prices_reach_the_same_plan() {
     let (s, t) = blobs_pair(1024, 4).unwrap_or_else(|| panic!("fixture"));
     let blur = |settings: SinkhornSettings| SinkhornSettings {
         blur: 0.03,
         ..settings
     };
+    let default = solve(&s, &t, &blur(SinkhornSettings::default()));
     let annealed = solve(&s, &t, &blur(SinkhornSettings::annealed()));
-    let phases: Vec<&str> = annealed.stats.phases.iter().map(|(name, _)| name).collect();
-    assert!(
-        phases.contains(&"coarse") && phases.contains(&"fine"),
-        "phases {phases:?}"
+    let warm = solve(
+        &s,
+        &t,
+        &blur(SinkhornSettings {
+            exact_prices: true,
+            ..SinkhornSettings::default()
+        }),
     );
-    assert!(!phases.contains(&"auction"), "no exact solve: {phases:?}");
+    for (name, r, exact_solve) in [
+        ("default", &default, false),
+        ("annealed", &annealed, false),
+        ("exact_prices", &warm, true),
+    ] {
+        let phases: Vec<&str> = r.stats.phases.iter().map(|(name, _)| name).collect();
+        assert_eq!(
+            phases.contains(&"auction"),
+            exact_solve,
+            "{name}: {phases:?}"
+        );
+        assert_eq!(phases.contains(&"fine"), !exact_solve, "{name}: {phases:?}");
+        assert!(
+            plan(r).marginal_error <= 1e-3,
+            "{name}: marginal error {} after {} iterations",
+            plan(r).marginal_error,
+            r.stats.iterations
+        );
+        let rel = (r.loss - default.loss).abs() / default.loss;
+        assert!(
+            rel < 1e-3,
+            "{name}: {} against default {}",
+            r.loss,
+            default.loss
+        );
+    }
+}
+
+#[test]
+fn default_meets_the_tolerance_and_the_exact_cost_at_blur_001() {
+    let (s, t) = blobs_pair(4096, 2).unwrap_or_else(|| panic!("fixture"));
+    let exact = exact::solve(&s, &t, &ExactSettings::default())
+        .unwrap_or_else(|e| panic!("{e}"))
+        .loss;
+    let r = solve(&s, &t, &SinkhornSettings::default());
+    let p = plan(&r);
     assert!(
-        plan(&annealed).marginal_error <= 1e-3,
-        "marginal error {} after {} iterations",
-        plan(&annealed).marginal_error,
-        annealed.stats.iterations
+        p.marginal_error <= 1e-3,
+        "marginal error {}",
+        p.marginal_error
     );
-    let warm = solve(&s, &t, &blur(SinkhornSettings::default()));
-    let rel = (annealed.loss - warm.loss).abs() / warm.loss;
+    let gap = (p.transport_cost - exact).abs() / exact;
     assert!(
-        rel < 1e-3,
-        "annealed {} against warm-started {}",
-        annealed.loss,
-        warm.loss
+        gap < 0.05,
+        "transport cost {} against exact {exact} ({gap})",
+        p.transport_cost
     );
 }
 
