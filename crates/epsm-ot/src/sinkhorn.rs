@@ -10,14 +10,14 @@
 //! | key                        | meaning                                   | default | range      |
 //! |----------------------------|-------------------------------------------|---------|------------|
 //! | `sinkhorn.blur`            | final length scale, `ε = blur²`           | 0.01    | > 0        |
-//! | `sinkhorn.scaling`         | per-step ratio of blur                    | 0.5     | (0, 1)     |
+//! | `sinkhorn.scaling`         | per-step ratio of blur                    | 0.9     | (0, 1)     |
 //! | `sinkhorn.debias`          | return the Sinkhorn divergence `S_ε`      | false   | bool       |
 //! | `sinkhorn.truncation`      | drop pairs with `c − f − g > t·ε`         | 30      | ≥ 10       |
 //! | `sinkhorn.marginal_tolerance` | L1 marginal error to reach at final ε | 1e-3    | > 0        |
 //! | `sinkhorn.overrelaxation`  | mixing β of the final-ε updates           | 1       | [1, 2)     |
 //! | `sinkhorn.anderson_memory` | Anderson memory of the final-ε updates    | 8       | ≥ 0        |
 //! | `sinkhorn.max_scale_iterations` | most updates per fine scale          | 30      | ≥ 1        |
-//! | `sinkhorn.scale_tolerance` | marginal error ending a fine scale        | 1e-2    | > 0        |
+//! | `sinkhorn.scale_tolerance` | marginal error ending a fine scale        | 3e-2    | > 0        |
 //! | `sinkhorn.annealing_overrelaxation` | ω of the fine-phase updates      | 1.5     | [1, 2)     |
 //! | `sinkhorn.exact_prices`    | warm-start the final ε from exact duals   | false   | bool       |
 //! | `sinkhorn.cluster_size`    | mean points per block (see `blocks`)      | 32      | ≥ 1        |
@@ -36,7 +36,7 @@
 //! ```toml
 //! [ot.sinkhorn]
 //! blur = 0.01
-//! scaling = 0.5
+//! scaling = 0.9
 //! debias = false
 //! ```
 
@@ -100,7 +100,7 @@ impl Default for SinkhornSettings {
     fn default() -> Self {
         Self {
             blur: 0.01,
-            scaling: 0.5,
+            scaling: 0.9,
             debias: false,
             truncation: 30.0,
             marginal_tolerance: 1e-3,
@@ -108,7 +108,7 @@ impl Default for SinkhornSettings {
             overrelaxation: 1.0,
             anderson_memory: 8,
             max_scale_iterations: 30,
-            scale_tolerance: 1e-2,
+            scale_tolerance: 3e-2,
             annealing_overrelaxation: 1.5,
             exact_prices: false,
             cluster_size: 32,
@@ -119,7 +119,12 @@ impl Default for SinkhornSettings {
 }
 
 impl SinkhornSettings {
-    /// The defaults: blur 0.01, scaling 0.5 (GeomLoss's), `OT_ε` (not debiased), coarse-corrected.
+    /// The defaults: blur 0.01, scaling 0.9, `OT_ε` (not debiased), coarse-corrected.
+    ///
+    /// Scaling 0.9 is the schedule the design names; with the coarse
+    /// correction, 0.5 (GeomLoss's own default) also meets the marginal
+    /// tolerance within 0.5 % of the exact cost on the benchmark's blob pairs,
+    /// with fewer pair evaluations (see `docs/performance.md`).
     pub fn balanced() -> Self {
         Self::default()
     }

@@ -67,6 +67,9 @@ pub struct OtBenchArgs {
     /// Sinkhorn blur (ε = blur²).
     #[arg(long, default_value_t = 0.01)]
     pub blur: f64,
+    /// Sinkhorn ratio between successive blurs of the ε-scaling schedule.
+    #[arg(long, default_value_t = 0.9)]
+    pub scaling: f64,
 }
 
 /// One benchmark measurement, as printed with `--json`.
@@ -97,6 +100,7 @@ pub fn run(args: &OtBenchArgs) -> anyhow::Result<()> {
         OtSolver::Exact => Matcher::exact(),
         OtSolver::Sinkhorn => Matcher::Sinkhorn(SinkhornSettings {
             blur: args.blur,
+            scaling: args.scaling,
             ..SinkhornSettings::default()
         }),
         OtSolver::Sliced => Matcher::sliced(),
