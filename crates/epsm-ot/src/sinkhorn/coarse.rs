@@ -120,11 +120,11 @@ impl ClusterMatrix {
             (list, m)
         };
         let (rows, row_max) = log_k
-            .iter()
+            .par_iter()
             .zip(lists)
             .map(|(row, list)| scaled(list.iter().copied().zip(row.iter().copied()).collect()))
             .unzip();
-        let (cols, col_max) = log_cols.into_iter().map(scaled).unzip();
+        let (cols, col_max) = log_cols.into_par_iter().map(scaled).unzip();
         Self {
             rows,
             row_max,
@@ -137,7 +137,9 @@ impl ClusterMatrix {
 /// `log_target − log Σ_k K_k exp(p_k)` per entry list: one half-update of the cluster scaling.
 ///
 /// Sums are taken relative to `max p` so they neither overflow nor (in practice) underflow;
-/// a list whose sum vanishes keeps its old value.
+/// a list whose sum vanishes keeps its old value. Sequential: with a few hundred to a few
+/// thousand clusters, rayon's fork–join per half-update cost more than the sums (n = 4096:
+/// 0.14 s of corrections per solve in parallel, 0.055 s sequentially).
 fn half_update(
     lists: &[Vec<(u32, f64)>],
     list_max: &[f64],
@@ -146,10 +148,10 @@ fn half_update(
     out: &mut [f64],
 ) {
     let top = p.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    let ep: Vec<f64> = p.par_iter().map(|&v| (v - top).exp()).collect();
-    out.par_iter_mut()
+    let ep: Vec<f64> = p.iter().map(|&v| (v - top).exp()).collect();
+    out.iter_mut()
         .zip(lists)
-        .zip(list_max.par_iter().zip(log_target))
+        .zip(list_max.iter().zip(log_target))
         .for_each(|((o, list), (m, lt))| {
             let s: f64 = list.iter().map(|&(k, kv)| kv * ep[k as usize]).sum();
             let new = lt - m - top - s.ln();
