@@ -232,7 +232,7 @@ fn stream_portable<const MOMENTS: bool>(
         Sink::Row(acc) if !MOMENTS => pairs = gathered_sum(x, y, lw, g, inv_eps, ranges, acc),
         Sink::Row(acc) => {
             for r in ranges {
-                pairs += push_range::<MOMENTS>(x, y, lw, g, inv_eps, r.clone(), acc, &mut scratch);
+                pairs += push_range_moments(x, y, lw, g, inv_eps, r.clone(), acc, &mut scratch);
             }
         }
         Sink::Blocks(sums) => pairs = block_sums(x, y, lw, g, inv_eps, ranges, sums),
@@ -240,9 +240,12 @@ fn stream_portable<const MOMENTS: bool>(
     pairs
 }
 
-/// Scores `lw_j + (g_j − c(x, y_j))·inv_eps` of the targets `range` into `out` (as long as `range`).
+/// Scores `lw_j + (g_j − c(x, y_j))·inv_eps` of the targets `range` into `out` (as long as
+/// `range`) and, if `COSTS`, the costs `c(x, y_j)` into `costs` (as long as `range`; unused
+/// otherwise).
 #[inline(always)]
-fn score_into(
+#[allow(clippy::too_many_arguments)]
+fn score_into<const COSTS: bool>(
     x: &Point,
     y: &[Vec<f32>; DIM],
     lw: &[f32],
@@ -250,6 +253,7 @@ fn score_into(
     inv_eps: f32,
     range: Range<usize>,
     out: &mut [f32],
+    costs: &mut [f32],
 ) {
     let (c0, c1, c2, c3, c4) = (
         &y[0][range.clone()],
@@ -266,6 +270,9 @@ fn score_into(
         let d3 = x[3] - c3[k];
         let d4 = x[4] - c4[k];
         let c = d0 * d0 + d1 * d1 + d2 * d2 + d3 * d3 + d4 * d4;
+        if COSTS {
+            costs[k] = c;
+        }
         out[k] = lws[k] + (gs[k] - c) * inv_eps;
     }
 }
@@ -290,7 +297,7 @@ fn gathered_sum(
         let mut start = range.start;
         while start < range.end {
             let len = (range.end - start).min(BLOCK - fill);
-            score_into(
+            score_into::<false>(
                 x,
                 y,
                 lw,
@@ -298,6 +305,7 @@ fn gathered_sum(
                 inv_eps,
                 start..start + len,
                 &mut scores[fill..fill + len],
+                &mut [],
             );
             fill += len;
             start += len;
@@ -343,7 +351,7 @@ fn block_sums(
 ) -> u64 {
     let mut len = 0;
     for range in ranges {
-        score_into(
+        score_into::<false>(
             x,
             y,
             lw,
@@ -351,6 +359,7 @@ fn block_sums(
             inv_eps,
             range.clone(),
             &mut sums.scores[len..len + range.len()],
+            &mut [],
         );
         len += range.len();
     }
@@ -386,10 +395,11 @@ struct Scratch {
     weights: [f32; BLOCK],
 }
 
-/// Streams one range of targets into `acc`, in blocks of [`BLOCK`]; returns its length.
+/// Streams one range of targets into `acc` with its moments, in blocks of [`BLOCK`];
+/// returns its length.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn push_range<const MOMENTS: bool>(
+fn push_range_moments(
     x: &Point,
     y: &[Vec<f32>; DIM],
     lw: &[f32],
@@ -408,27 +418,16 @@ fn push_range<const MOMENTS: bool>(
     while start < range.end {
         let len = (range.end - start).min(BLOCK);
         let padded = len.div_ceil(LANES) * LANES;
-        let (c0, c1, c2, c3, c4) = (
-            &y[0][start..start + len],
-            &y[1][start..start + len],
-            &y[2][start..start + len],
-            &y[3][start..start + len],
-            &y[4][start..start + len],
+        score_into::<true>(
+            x,
+            y,
+            lw,
+            g,
+            inv_eps,
+            start..start + len,
+            &mut scores[..len],
+            &mut costs[..len],
         );
-        let (lws, gs) = (&lw[start..start + len], &g[start..start + len]);
-        let (sc, cc) = (&mut scores[..len], &mut costs[..len]);
-        for k in 0..len {
-            let d0 = x[0] - c0[k];
-            let d1 = x[1] - c1[k];
-            let d2 = x[2] - c2[k];
-            let d3 = x[3] - c3[k];
-            let d4 = x[4] - c4[k];
-            let c = d0 * d0 + d1 * d1 + d2 * d2 + d3 * d3 + d4 * d4;
-            if MOMENTS {
-                cc[k] = c;
-            }
-            sc[k] = lws[k] + (gs[k] - c) * inv_eps;
-        }
         scores[len..padded].fill(f32::NEG_INFINITY);
         let block_max = lane_max(&scores[..padded]);
         acc.rescale_to(block_max);
@@ -441,18 +440,15 @@ fn push_range<const MOMENTS: bool>(
             *w = exp_nonpositive(sc - m);
         }
         acc.sum += f64::from(lane_sum(&weights[..padded]));
-        if MOMENTS {
-            let ys = [c0, c1, c2, c3, c4];
-            let mut mom = [0.0f32; DIM + 1];
-            for k in 0..len {
-                for d in 0..DIM {
-                    mom[d] += weights[k] * ys[d][k];
-                }
-                mom[DIM] += weights[k] * costs[k];
+        let mut mom = [0.0f32; DIM + 1];
+        for k in 0..len {
+            for d in 0..DIM {
+                mom[d] += weights[k] * y[d][start + k];
             }
-            for (a, b) in acc.moments.iter_mut().zip(mom) {
-                *a += f64::from(b);
-            }
+            mom[DIM] += weights[k] * costs[k];
+        }
+        for (a, b) in acc.moments.iter_mut().zip(mom) {
+            *a += f64::from(b);
         }
         start += len;
     }

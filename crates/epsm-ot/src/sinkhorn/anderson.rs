@@ -79,6 +79,42 @@ impl Anderson {
     }
 }
 
+/// [`Anderson`] with a restart safeguard, for iterations that measure an error per iterate.
+///
+/// It keeps the iterate of smallest error so far. When an error is not finite or more than
+/// ten times that smallest one, the extrapolation has gone astray: the history is dropped and
+/// the iteration restarts plainly from the best iterate.
+#[derive(Debug, Clone)]
+pub(crate) struct Guarded {
+    anderson: Anderson,
+    best_error: f64,
+    best: Vec<f64>,
+}
+
+impl Guarded {
+    /// Guards `anderson`; `start` is the iterate to restart from until one has a finite error.
+    pub(crate) fn new(anderson: Anderson, start: &[f64]) -> Self {
+        Self {
+            anderson,
+            best_error: f64::INFINITY,
+            best: start.to_vec(),
+        }
+    }
+
+    /// The next iterate from `x`, `F(x)` and the error of `x`, and whether it is a restart
+    /// from the best iterate (`F(x)` unused then).
+    pub(crate) fn step(&mut self, x: &[f64], fx: &[f64], error: f64) -> (Vec<f64>, bool) {
+        if error < self.best_error {
+            self.best_error = error;
+            self.best = x.to_vec();
+        } else if !error.is_finite() || error > 10.0 * self.best_error {
+            self.anderson.reset();
+            return (self.best.clone(), true);
+        }
+        (self.anderson.step(x, fx), false)
+    }
+}
+
 fn diff(a: &[f64], b: &[f64]) -> Vec<f64> {
     a.iter().zip(b).map(|(x, y)| x - y).collect()
 }
@@ -167,5 +203,29 @@ mod tests {
         let x = solve_regularised(a, vec![1.0, 2.0]).expect("non-singular");
         assert!((x[0] - 1.0 / 11.0).abs() < 1e-8 && (x[1] - 7.0 / 11.0).abs() < 1e-8);
         assert!(solve_regularised(vec![vec![0.0]], vec![1.0]).is_none());
+    }
+
+    #[test]
+    fn guarded_restarts_from_the_best_iterate_when_the_error_blows_up() {
+        let mut guarded = Guarded::new(Anderson::new(4, 1.0), &[0.0, 0.0]);
+        // A non-finite first error: back to the start, history dropped.
+        assert_eq!(
+            guarded.step(&[5.0, 5.0], &[6.0, 6.0], f64::NAN),
+            (vec![0.0, 0.0], true)
+        );
+        // Improving errors: plain (relaxed) steps, and [1, 1] becomes the best iterate.
+        assert_eq!(
+            guarded.step(&[1.0, 1.0], &[2.0, 2.0], 0.5),
+            (vec![2.0, 2.0], false)
+        );
+        let (_, restarted) = guarded.step(&[2.0, 2.0], &[2.5, 2.5], 0.4);
+        assert!(!restarted);
+        // Worse but within ten times the best (0.4): no restart.
+        assert!(!guarded.step(&[3.0, 3.0], &[3.0, 3.0], 3.9).1);
+        // More than ten times the best: restart from the best iterate, [2, 2].
+        assert_eq!(
+            guarded.step(&[9.0, 9.0], &[9.0, 9.0], 4.1),
+            (vec![2.0, 2.0], true)
+        );
     }
 }

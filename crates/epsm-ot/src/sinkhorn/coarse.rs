@@ -22,7 +22,7 @@
 
 use rayon::prelude::*;
 
-use super::anderson::Anderson;
+use super::anderson::{Anderson, Guarded};
 use super::pass::{Level, LogSum};
 
 /// L1 error of the cluster marginals at which the cluster scaling stops.
@@ -173,11 +173,10 @@ fn scale(
     log_b: &[f64],
 ) -> Option<(Vec<f64>, Vec<f64>, usize)> {
     let k = ClusterMatrix::new(log_k, lists, log_b.len());
-    let mut anderson = Anderson::new(SCALING_MEMORY, 1.0);
     let mut u = vec![0.0; log_a.len()];
     let mut v = vec![0.0; log_b.len()];
     let mut ut = u.clone();
-    let mut best = (f64::INFINITY, u.clone());
+    let mut guarded = Guarded::new(Anderson::new(SCALING_MEMORY, 1.0), &u);
     let finite = |p: &[f64]| p.iter().all(|t| t.is_finite());
     let mut updates = 0;
     while updates < SCALING_ITERATIONS {
@@ -194,14 +193,7 @@ fn scale(
         if error <= SCALING_TOLERANCE && finite(&u) && finite(&v) {
             return Some((u, v, updates));
         }
-        if error < best.0 {
-            best = (error, u.clone());
-        } else if !error.is_finite() || error > 10.0 * best.0 {
-            anderson.reset();
-            u.clone_from(&best.1);
-            continue;
-        }
-        u = anderson.step(&u, &ut);
+        u = guarded.step(&u, &ut, error).0;
     }
     None
 }

@@ -28,7 +28,7 @@
 use rayon::prelude::*;
 
 use super::SinkhornSettings;
-use super::anderson::Anderson;
+use super::anderson::{Anderson, Guarded};
 use super::coarse;
 use super::pass::{Level, coarse_cloud, softmin, softmin_blocks};
 use crate::blocks::{Clustered, Support, fit_potentials};
@@ -285,10 +285,10 @@ pub(crate) fn polish(
     let (fx, fy) = (Level::fine(x), Level::fine(y));
     let start = std::time::Instant::now();
     let eps = settings.blur * settings.blur;
-    let mut anderson = Anderson::new(settings.anderson_memory, settings.overrelaxation);
+    let anderson = Anderson::new(settings.anderson_memory, settings.overrelaxation);
+    let mut guarded = Guarded::new(anderson, &f);
     let mut support = lp.support(&f, &g, eps);
     let mut marginal_error = f64::INFINITY;
-    let mut best = (f64::INFINITY, f.clone());
     for round in 0..settings.max_polish_iterations {
         // One full update from f: g exact for the target marginal, then the source update.
         let (gt, p1) = softmin(&fy, &fx, &support.cols, &f, eps);
@@ -300,16 +300,9 @@ pub(crate) fn polish(
         if marginal_error <= settings.marginal_tolerance {
             break;
         }
-        if marginal_error < best.0 {
-            best = (marginal_error, f.clone());
-        } else if !marginal_error.is_finite() || marginal_error > 10.0 * best.0 {
-            // Safeguard: the extrapolation went astray; restart plainly from the best iterate.
-            anderson.reset();
-            f.clone_from(&best.1);
-            continue;
-        }
-        f = anderson.step(&f, &ft);
-        if round % SUPPORT_REFRESH == SUPPORT_REFRESH - 1 {
+        let restarted;
+        (f, restarted) = guarded.step(&f, &ft, marginal_error);
+        if !restarted && round % SUPPORT_REFRESH == SUPPORT_REFRESH - 1 {
             support = lp.support(&f, &g, eps);
         }
     }
