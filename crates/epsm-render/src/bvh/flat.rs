@@ -26,9 +26,10 @@
 //!
 //! The stack holds [`STACK`] nodes; a node pushes at most seven entries
 //! beyond the one it continues with, so trees up to 18 levels deep never
-//! overflow it (the tests check the bound `stack_need` of their trees). A deeper tree (obvhs's PLOC builds give about
-//! `log8(triangles) + 3` levels) would lose pending nodes past the capacity,
-//! as obvhs's own walk does past 32 levels.
+//! overflow it (the tests check the bound `stack_need` of their trees). A
+//! deeper tree (obvhs's PLOC builds give about `log8(triangles) + 3` levels)
+//! would lose pending nodes past the capacity, as obvhs's own walk does past
+//! 32 levels.
 //!
 //! No parameters.
 
@@ -61,7 +62,7 @@ struct FlatNode {
     inner: u8,
 }
 
-/// A hit in the static BVH.
+/// A hit in a bottom-level BVH.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct FlatHit {
     /// The caller's id of the triangle hit.

@@ -1,7 +1,7 @@
 //! Two-level BVH over the scene's objects (obvhs CWBVH at both levels, built
-//! by obvhs): the static BVH converted to our own traversal layout (module
-//! `flat`), the instanced meshes' BVHs and the top level walked in obvhs's
-//! layout by our own loop (module `walk`).
+//! by obvhs): every bottom-level BVH (the static one and each instanced
+//! mesh's) converted to our own traversal layout (module `flat`), the top
+//! level walked in obvhs's layout by our own loop (module `walk`).
 //!
 //! Static objects (all objects not made dynamic, except copies of a large
 //! shared mesh) are traced through one bottom-level BVH over their
