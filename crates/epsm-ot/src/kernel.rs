@@ -154,6 +154,36 @@ fn stream<const MOMENTS: bool>(
     ranges: &[Range<usize>],
     sink: Sink,
 ) -> u64 {
+    match simd() {
+        #[cfg(target_arch = "x86_64")]
+        #[allow(unsafe_code)]
+        // SAFETY: `stream_avx512` only requires the four AVX-512 subsets it is
+        // compiled for, which `simd` detected on the running CPU; it has no other
+        // precondition (it is the same safe code compiled for 512-bit registers).
+        Simd::Avx512 => unsafe { stream_avx512::<MOMENTS>(x, y, lw, g, inv_eps, ranges, sink) },
+        #[cfg(target_arch = "x86_64")]
+        #[allow(unsafe_code)]
+        // SAFETY: `stream_avx2` only requires AVX2 and FMA, which `simd` detected on
+        // the running CPU; it has no other precondition (it is the same safe code
+        // compiled for 256-bit registers).
+        Simd::Avx2 => unsafe { stream_avx2::<MOMENTS>(x, y, lw, g, inv_eps, ranges, sink) },
+        _ => stream_portable::<MOMENTS>(x, y, lw, g, inv_eps, ranges, sink),
+    }
+}
+
+/// The widest instruction set the running CPU supports among those our SIMD bodies are compiled for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Simd {
+    /// AVX-512 F, BW, DQ and VL (16 `f32` lanes).
+    Avx512,
+    /// AVX2 and FMA (8 `f32` lanes).
+    Avx2,
+    /// Baseline x86-64 (SSE2) or another architecture.
+    Portable,
+}
+
+/// Detects [`Simd`] on the running CPU (the standard library caches the detection).
+pub(crate) fn simd() -> Simd {
     #[cfg(target_arch = "x86_64")]
     {
         if std::arch::is_x86_feature_detected!("avx512f")
@@ -161,22 +191,14 @@ fn stream<const MOMENTS: bool>(
             && std::arch::is_x86_feature_detected!("avx512dq")
             && std::arch::is_x86_feature_detected!("avx512vl")
         {
-            #[allow(unsafe_code)]
-            // SAFETY: `stream_avx512` only requires the four AVX-512 subsets it is
-            // compiled for, all detected on the running CPU just above; it has no other
-            // precondition (it is the same safe code compiled for 512-bit registers).
-            return unsafe { stream_avx512::<MOMENTS>(x, y, lw, g, inv_eps, ranges, sink) };
+            return Simd::Avx512;
         }
         if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
         {
-            #[allow(unsafe_code)]
-            // SAFETY: `stream_avx2` only requires AVX2 and FMA, both detected on the
-            // running CPU just above; it has no other precondition (it is the same safe
-            // code compiled for 256-bit registers).
-            return unsafe { stream_avx2::<MOMENTS>(x, y, lw, g, inv_eps, ranges, sink) };
+            return Simd::Avx2;
         }
     }
-    stream_portable::<MOMENTS>(x, y, lw, g, inv_eps, ranges, sink)
+    Simd::Portable
 }
 
 /// [`stream_portable`] compiled for 512-bit AVX-512 registers (selected at run time).

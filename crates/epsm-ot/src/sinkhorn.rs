@@ -238,7 +238,8 @@ fn solve_one(x: &Clustered, y: &Clustered, diam2: f64, settings: &SinkhornSettin
         solve_dual(x, y, diam2, settings)
     };
     let start = std::time::Instant::now();
-    let (barycentres, costs, bary_pairs) = pass::barycentres(x, y, &dual);
+    let (barycentres, costs, bary_pairs) =
+        pass::barycentres(x, y, &dual, settings.truncation * dual.eps);
     dual.phases
         .add("barycentres", start.elapsed().as_secs_f64());
     let n = x.cloud.len() as f64;

@@ -217,7 +217,7 @@ mod tests {
         g: &[f64],
         eps: f64,
     ) -> (f64, f64) {
-        let pass = softmin_blocks(x, y, &sup.rows, g, eps, |i, _| f[i]);
+        let pass = softmin_blocks(x, y, &sup.rows, g, eps, |i, _| f[i], None);
         let (a, b) = (cluster_log_masses(x), cluster_log_masses(y));
         let mut cols = vec![0.0; b.len()];
         let mut row_error = 0.0;
@@ -269,7 +269,7 @@ mod tests {
             row0 > 0.05 && col0 > 0.05,
             "not a test: errors {row0}, {col0}"
         );
-        let pass = softmin_blocks(&x, &y, &sup.rows, &g, eps, |i, _| f[i]);
+        let pass = softmin_blocks(&x, &y, &sup.rows, &g, eps, |i, _| f[i], None);
         let outcome = correct(&x, &y, &sup.rows, &pass.log_masses, &mut f, &mut g, eps);
         assert!(matches!(outcome, Correction::Applied { .. }), "{outcome:?}");
         let (row, col) = cluster_marginal_errors(&x, &y, &sup, &f, &g, eps);

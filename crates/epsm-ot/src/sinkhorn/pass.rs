@@ -3,14 +3,15 @@
 //! A pass streams, for every point of one measure, the listed target blocks
 //! (consecutive blocks merged into one range) through `kernel::stream_row`,
 //! in parallel over source blocks with a fixed partition, so results do not
-//! depend on the number of threads.
+//! depend on the number of threads. With a [`Cut`], each point streams only
+//! the listed blocks its own bound keeps (`blocks::PointCut`).
 
 use std::ops::Range;
 
 use rayon::prelude::*;
 
 use super::dual::Dual;
-use crate::blocks::Clustered;
+use crate::blocks::{Clustered, PointCut, PotentialFit, Selection, fit_potentials, push_merged};
 use crate::kernel::{BlockSums, RowSum, stream_blocks, stream_row};
 use crate::points::{Point, PointCloud};
 
@@ -19,6 +20,8 @@ pub(super) struct Level<'a> {
     pub cloud: &'a PointCloud,
     pub ranges: Vec<Range<usize>>,
     pub log_w: Vec<f32>,
+    /// The clustering the blocks are the clusters of (points, not centroids): what a [`Cut`] needs.
+    pub clustered: Option<&'a Clustered>,
 }
 
 impl<'a> Level<'a> {
@@ -28,7 +31,72 @@ impl<'a> Level<'a> {
             cloud: &c.cloud,
             ranges: c.ranges(),
             log_w: vec![-(n as f32).ln(); n],
+            clustered: Some(c),
         }
+    }
+}
+
+/// Per-point kernel truncation of a pass from `x` to `y`: point `i` skips the listed
+/// target blocks whose bound on `c_ij − own_i − g_j` exceeds `threshold`.
+///
+/// Applies where the target level has a clustering (a fine level); a point whose
+/// every block would be skipped streams them all.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Cut<'a> {
+    /// The source potential the truncation is measured with (before the update).
+    pub own: &'a [f64],
+    /// `truncation · ε`.
+    pub threshold: f64,
+}
+
+/// A [`Cut`] with the fits of the target potential, made once per pass.
+struct Fitted<'a> {
+    clustered: &'a Clustered,
+    fits: Vec<PotentialFit>,
+    cut: Cut<'a>,
+}
+
+impl<'a> Fitted<'a> {
+    fn new(y: &Level<'a>, g: &[f64], cut: Option<Cut<'a>>) -> Option<Self> {
+        let (clustered, cut) = (y.clustered?, cut?);
+        Some(Self {
+            clustered,
+            fits: fit_potentials(clustered, g),
+            cut,
+        })
+    }
+}
+
+/// The target ranges one source block streams, cut per point when the pass has a [`Cut`].
+struct Targets<'a> {
+    cut: Option<(PointCut, Cut<'a>)>,
+    /// The current point's blocks (the whole list when there is no cut).
+    now: Selection,
+}
+
+impl<'a> Targets<'a> {
+    fn new(y: &Level, list: &[u32], fitted: Option<&Fitted<'a>>) -> Self {
+        let now = Selection::all(list.len(), merged_ranges(&y.ranges, list));
+        Self {
+            cut: fitted.map(|f| (PointCut::gather(f.clustered, &f.fits, list), f.cut)),
+            now,
+        }
+    }
+
+    /// Selects the blocks source point `i` at `x` streams.
+    fn point(&mut self, i: usize, x: &Point) {
+        if let Some((bounds, cut)) = &self.cut {
+            bounds.select(x, (cut.own[i] + cut.threshold) as f32, &mut self.now);
+        }
+    }
+
+    fn ranges(&self) -> &[Range<usize>] {
+        &self.now.ranges
+    }
+
+    /// Positions in the list of the blocks streamed for the current point.
+    fn kept(&self) -> impl Iterator<Item = usize> + '_ {
+        self.now.kept()
     }
 }
 
@@ -58,11 +126,7 @@ fn centred(g: &[f64]) -> (Vec<f32>, f64) {
 fn merged_ranges(ranges: &[Range<usize>], list: &[u32]) -> Vec<Range<usize>> {
     let mut out: Vec<Range<usize>> = Vec::with_capacity(list.len());
     for &j in list {
-        let r = ranges[j as usize].clone();
-        match out.last_mut() {
-            Some(last) if last.end == r.start => last.end = r.end,
-            _ => out.push(r),
-        }
+        push_merged(&mut out, ranges[j as usize].clone());
     }
     out
 }
@@ -74,28 +138,32 @@ pub(super) fn softmin(
     lists: &[Vec<u32>],
     g: &[f64],
     eps: f64,
+    cut: Option<Cut>,
 ) -> (Vec<f64>, u64) {
     let inv_eps = (1.0 / eps) as f32;
     let cols = y.cloud.columns();
     let (g32, kappa) = centred(g);
+    let fitted = Fitted::new(y, g, cut);
     let parts: Vec<(Vec<f64>, u64)> = x
         .ranges
         .par_iter()
         .zip(lists)
         .map(|(rows, list)| {
             let mut pairs = 0;
-            let targets = merged_ranges(&y.ranges, list);
+            let mut targets = Targets::new(y, list, fitted.as_ref());
             let out = rows
                 .clone()
                 .map(|i| {
+                    let point = x.cloud.point(i);
+                    targets.point(i, &point);
                     let mut acc = RowSum::new();
                     pairs += stream_row::<false>(
-                        &x.cloud.point(i),
+                        &point,
                         cols,
                         &y.log_w,
                         &g32,
                         inv_eps,
-                        &targets,
+                        targets.ranges(),
                         &mut acc,
                     );
                     -kappa - eps * acc.log_sum()
@@ -109,13 +177,21 @@ pub(super) fn softmin(
 }
 
 /// Per-source-point barycentre `Σ_j π_ij y_j / Σ_j π_ij` and mean cost, in the clustered order.
+///
+/// Pairs whose reduced cost bound exceeds `threshold` are cut per point (see [`Cut`]).
 pub(crate) fn barycentres(
     x: &Clustered,
     y: &Clustered,
     dual: &Dual,
+    threshold: f64,
 ) -> (Vec<[f32; 5]>, Vec<f64>, u64) {
     let (fx, fy) = (Level::fine(x), Level::fine(y));
     let (g32, _) = centred(&dual.g);
+    let cut = Cut {
+        own: &dual.f,
+        threshold,
+    };
+    let fitted = Fitted::new(&fy, &dual.g, Some(cut));
     let inv_eps = (1.0 / dual.eps) as f32;
     let cols = y.cloud.columns();
     let parts: Vec<(Vec<(Point, f64)>, u64)> = fx
@@ -124,18 +200,20 @@ pub(crate) fn barycentres(
         .zip(&dual.support.rows)
         .map(|(rows, list)| {
             let mut pairs = 0;
-            let targets = merged_ranges(&fy.ranges, list);
+            let mut targets = Targets::new(&fy, list, fitted.as_ref());
             let out = rows
                 .clone()
                 .map(|i| {
+                    let point = x.cloud.point(i);
+                    targets.point(i, &point);
                     let mut acc = RowSum::new();
                     pairs += stream_row::<true>(
-                        &x.cloud.point(i),
+                        &point,
                         cols,
                         &fy.log_w,
                         &g32,
                         inv_eps,
-                        &targets,
+                        targets.ranges(),
                         &mut acc,
                     );
                     acc.barycentre()
@@ -170,42 +248,50 @@ pub(super) fn softmin_blocks(
     g: &[f64],
     eps: f64,
     next: impl Fn(usize, f64) -> f64 + Sync,
+    cut: Option<Cut>,
 ) -> BlockPass {
     let inv_eps = (1.0 / eps) as f32;
     let cols = y.cloud.columns();
     let (g32, kappa) = centred(g);
+    let fitted = Fitted::new(y, g, cut);
     let parts: Vec<(Vec<f64>, Vec<f64>, u64)> = x
         .ranges
         .par_iter()
         .zip(lists)
         .map(|(rows, list)| {
             let mut pairs = 0;
-            let targets = merged_ranges(&y.ranges, list);
+            let mut targets = Targets::new(y, list, fitted.as_ref());
             let lens: Vec<u32> = list
                 .iter()
                 .map(|&j| y.ranges[j as usize].len() as u32)
                 .collect();
-            let total: usize = targets.iter().map(Range::len).sum();
+            let total: usize = targets.ranges().iter().map(Range::len).sum();
             let mut scores = vec![0.0f32; total.div_ceil(16) * 16];
+            let mut kept_lens = Vec::with_capacity(list.len());
             let mut block = vec![0.0f32; list.len()];
             // Block masses relative to one shared reference `exp(top)`, rescaled when it grows.
             let mut masses = vec![0.0f64; list.len()];
             let mut top = f64::NEG_INFINITY;
             let mut out = Vec::with_capacity(rows.len());
             for i in rows.clone() {
+                let point = x.cloud.point(i);
+                targets.point(i, &point);
+                kept_lens.clear();
+                kept_lens.extend(targets.kept().map(|k| lens[k]));
+                let block = &mut block[..kept_lens.len()];
                 let mut row = BlockSums {
-                    lens: &lens,
+                    lens: &kept_lens,
                     scores: &mut scores,
-                    out: &mut block,
+                    out: block,
                     max: f32::NEG_INFINITY,
                 };
                 pairs += stream_blocks(
-                    &x.cloud.point(i),
+                    &point,
                     cols,
                     &y.log_w,
                     &g32,
                     inv_eps,
-                    &targets,
+                    targets.ranges(),
                     &mut row,
                 );
                 let row_max = f64::from(row.max);
@@ -223,8 +309,8 @@ pub(super) fn softmin_blocks(
                     top = v;
                 }
                 let scale = (v - top).exp();
-                for (t, &b) in masses.iter_mut().zip(&block) {
-                    *t += scale * f64::from(b);
+                for (k, &b) in targets.kept().zip(block.iter()) {
+                    masses[k] += scale * f64::from(b);
                 }
             }
             let log_masses = masses.iter().map(|&t| top + t.ln()).collect();
@@ -271,5 +357,58 @@ impl LogSum {
 
     pub(super) fn value(&self) -> f64 {
         self.max + self.sum.ln()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::SinkhornSettings;
+    use crate::blocks::Support;
+    use crate::cost::diameter_sq;
+    use crate::sinkhorn::solve_dual;
+    use crate::synthetic::blobs_pair;
+
+    #[test]
+    fn cut_passes_match_uncut_passes_with_fewer_pairs() {
+        let (s, t) = blobs_pair(2048, 4).unwrap_or_else(|| panic!("fixture"));
+        let (cx, cy) = (Clustered::new(&s, 32), Clustered::new(&t, 32));
+        let settings = SinkhornSettings {
+            blur: 0.02,
+            ..SinkhornSettings::default()
+        };
+        let eps = settings.blur * settings.blur;
+        let dual = solve_dual(&cx, &cy, diameter_sq(&s, &t), &settings);
+        let (x, y) = (Level::fine(&cx), Level::fine(&cy));
+        let (f, g) = (&dual.f, &dual.g);
+        let sup = Support::truncated(
+            &cx,
+            &fit_potentials(&cx, f),
+            &cy,
+            &fit_potentials(&cy, g),
+            settings.truncation * eps,
+        );
+        let cut = Some(Cut {
+            own: f,
+            threshold: settings.truncation * eps,
+        });
+        let (whole, whole_pairs) = softmin(&x, &y, &sup.rows, g, eps, None);
+        let (part, part_pairs) = softmin(&x, &y, &sup.rows, g, eps, cut);
+        assert!(
+            2 * part_pairs < whole_pairs,
+            "cut {part_pairs} of {whole_pairs} pairs"
+        );
+        for (i, (a, b)) in whole.iter().zip(&part).enumerate() {
+            assert!((a - b).abs() <= 1e-5 * eps, "point {i}: {a} vs {b}");
+        }
+        let blocks = |cut| softmin_blocks(&x, &y, &sup.rows, g, eps, |i, _| f[i], cut);
+        let (whole, part) = (blocks(None), blocks(cut));
+        assert_eq!(whole.pairs, whole_pairs);
+        assert_eq!(part.pairs, part_pairs);
+        let mass = |m: &[Vec<f64>]| m.iter().flatten().map(|v| v.exp()).sum::<f64>();
+        assert!((mass(&whole.log_masses) - mass(&part.log_masses)).abs() <= 1e-6);
+        for (a, b) in whole.softmin.iter().zip(&part.softmin) {
+            assert!((a - b).abs() <= 1e-5 * eps, "{a} vs {b}");
+        }
     }
 }
