@@ -89,8 +89,8 @@ pub struct SinkhornSettings {
     pub cluster_size: usize,
     /// The coarse phase runs while `√ε` exceeds this many mean cluster radii.
     pub jump_radii: f64,
-    /// Fine-phase updates between two coarse corrections (0: none; a scale's first
-    /// update is always corrected when this is not 0). A correction
+    /// Fine-phase updates between two coarse corrections (0: none; the target
+    /// update that opens a scale is always corrected when this is not 0). A correction
     /// shifts `f, g` by one constant per cluster so that the plan's cluster
     /// marginals equal the clouds' cluster masses (two-grid Sinkhorn), removing
     /// the large-scale error that plain updates at small ε remove only slowly.
