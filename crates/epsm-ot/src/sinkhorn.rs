@@ -279,6 +279,8 @@ pub fn solve(
         iterations: xy.dual.iterations,
         pair_evaluations: xy.pairs,
         marginal_error: Some(xy.dual.marginal_error),
+        skipped_corrections: xy.dual.guards.skipped_corrections,
+        widened_supports: xy.dual.guards.widened_supports,
         ..SolveStats::default()
     };
     let (loss, pull) = if settings.debias {
@@ -286,6 +288,10 @@ pub fn solve(
         let yy = solve_one(&y, &y, diameter_sq(target, target), settings);
         stats.iterations += xx.dual.iterations + yy.dual.iterations;
         stats.pair_evaluations += xx.pairs + yy.pairs;
+        for guards in [xx.dual.guards, yy.dual.guards] {
+            stats.skipped_corrections += guards.skipped_corrections;
+            stats.widened_supports += guards.widened_supports;
+        }
         phases.merge(&xx.dual.phases);
         phases.merge(&yy.dual.phases);
         let self_bary = x.unsort(&xx.barycentres);

@@ -83,12 +83,17 @@ impl Anderson {
 ///
 /// It keeps the iterate of smallest error so far. When an error is not finite or more than
 /// ten times that smallest one, the extrapolation has gone astray: the history is dropped and
-/// the iteration restarts plainly from the best iterate.
+/// the iteration restarts from the best iterate with plain relaxed steps, which it keeps
+/// until an iterate improves on the best. (Resuming the extrapolation at once could
+/// repeat the same excursion and restart forever: a cluster scaling stalled at its best
+/// error that way on a blob pair, seed 1 of `epsm bench ot`.)
 #[derive(Debug, Clone)]
 pub(crate) struct Guarded {
     anderson: Anderson,
     best_error: f64,
     best: Vec<f64>,
+    /// Plain steps since the last restart, until an iterate beats the best.
+    plain: bool,
 }
 
 impl Guarded {
@@ -98,6 +103,7 @@ impl Guarded {
             anderson,
             best_error: f64::INFINITY,
             best: start.to_vec(),
+            plain: false,
         }
     }
 
@@ -107,9 +113,15 @@ impl Guarded {
         if error < self.best_error {
             self.best_error = error;
             self.best = x.to_vec();
-        } else if !error.is_finite() || error > 10.0 * self.best_error {
+            self.plain = false;
+        } else if !error.is_finite() || (!self.plain && error > 10.0 * self.best_error) {
             self.anderson.reset();
+            self.plain = true;
             return (self.best.clone(), true);
+        }
+        if self.plain {
+            // No history: the relaxed step `x + β (F(x) − x)`.
+            self.anderson.reset();
         }
         (self.anderson.step(x, fx), false)
     }
@@ -226,6 +238,22 @@ mod tests {
         assert_eq!(
             guarded.step(&[9.0, 9.0], &[9.0, 9.0], 4.1),
             (vec![2.0, 2.0], true)
+        );
+        // After a restart: plain relaxed steps, with no new restart even above ten times
+        // the best, until an iterate beats the best.
+        assert_eq!(
+            guarded.step(&[2.0, 2.0], &[3.0, 3.0], 0.4),
+            (vec![3.0, 3.0], false)
+        );
+        assert_eq!(
+            guarded.step(&[3.0, 3.0], &[5.0, 5.0], 5.0),
+            (vec![5.0, 5.0], false)
+        );
+        assert!(!guarded.step(&[5.0, 5.0], &[5.5, 5.5], 0.3).1);
+        // Extrapolating again: a blow-up restarts from the new best, [5, 5].
+        assert_eq!(
+            guarded.step(&[7.0, 7.0], &[7.0, 7.0], 3.1),
+            (vec![5.0, 5.0], true)
         );
     }
 }

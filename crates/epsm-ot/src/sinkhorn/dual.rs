@@ -51,8 +51,19 @@ pub(crate) struct Dual {
     pub iterations: usize,
     pub pairs: u64,
     pub marginal_error: f64,
+    /// What the safeguards of the fine phase did.
+    pub guards: Guards,
     /// Wall-clock time of the coarse, fine and polish phases.
     pub phases: PhaseTimes,
+}
+
+/// Counts of the fine phase's safeguards.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub(crate) struct Guards {
+    /// Coarse corrections skipped because the cluster scaling did not converge.
+    pub skipped_corrections: usize,
+    /// Times a scale's support was rebuilt wider after such a skip.
+    pub widened_supports: usize,
 }
 
 /// The ε schedule of GeomLoss: `diameter²` down to `blur²` with ratio `scaling²`.
@@ -75,18 +86,14 @@ struct Loop<'a> {
     settings: &'a SinkhornSettings,
     pairs: u64,
     iterations: usize,
+    guards: Guards,
 }
 
 impl Loop<'_> {
-    fn support(&self, f: &[f64], g: &[f64], eps: f64) -> Support {
+    /// The block pairs whose reduced-cost bound for `f, g` is at most `threshold`.
+    fn support(&self, f: &[f64], g: &[f64], threshold: f64) -> Support {
         let (fit_f, fit_g) = (fit_potentials(self.x, f), fit_potentials(self.y, g));
-        Support::truncated(
-            self.x,
-            &fit_f,
-            self.y,
-            &fit_g,
-            self.settings.truncation * eps,
-        )
+        Support::truncated(self.x, &fit_f, self.y, &fit_g, threshold)
     }
 
     /// One Sinkhorn update: `f ← softmin(g)`, then `g ← softmin(f)`.
@@ -123,35 +130,43 @@ impl Loop<'_> {
         let settings = self.settings;
         let omega = settings.annealing_overrelaxation;
         let period = settings.coarse_period;
-        let sup = self.support(f, g, eps);
-        let threshold = settings.truncation * eps;
-        let g_half = |f: &mut [f64], g: &mut [f64], correct: bool| {
-            if correct {
-                // The target update also gives the block masses; correct before the next source update.
-                let next = |j: usize, t: f64| g[j] + omega * (t - g[j]);
-                let pass = softmin_blocks(
-                    fy,
-                    fx,
-                    &sup.cols,
-                    f,
-                    eps,
-                    next,
-                    Some(Cut { own: g, threshold }),
-                );
-                relax(g, &pass.softmin, omega);
-                coarse::correct(fy, fx, &sup.cols, &pass.log_masses, g, f, eps);
-                pass.pairs
-            } else {
-                let (gt, pairs) =
-                    softmin(fy, fx, &sup.cols, f, eps, Some(Cut { own: g, threshold }));
-                relax(g, &gt, omega);
-                pairs
-            }
-        };
+        // Support and per-point cut keep reduced costs up to `width · truncation · ε`.
+        let mut width = 1.0;
+        let mut threshold = settings.truncation * eps;
+        let mut sup = self.support(f, g, threshold);
+        let g_half =
+            |sup: &Support, threshold: f64, f: &mut [f64], g: &mut [f64], correct: bool| {
+                let cut = Some(Cut { own: g, threshold });
+                if correct {
+                    // The target update also gives the block masses; correct before the next source update.
+                    let next = |j: usize, t: f64| g[j] + omega * (t - g[j]);
+                    let pass = softmin_blocks(fy, fx, &sup.cols, f, eps, next, cut);
+                    relax(g, &pass.softmin, omega);
+                    let outcome = coarse::correct(fy, fx, &sup.cols, &pass.log_masses, g, f, eps);
+                    (pass.pairs, Some(outcome))
+                } else {
+                    let (gt, pairs) = softmin(fy, fx, &sup.cols, f, eps, cut);
+                    relax(g, &gt, omega);
+                    (pairs, None)
+                }
+            };
         // ε changed: the scale opens with a target update, corrected (the previous scale
         // ended on a source update).
-        self.pairs += g_half(f, g, period > 0);
+        let (pairs, mut outcome) = g_half(&sup, threshold, f, g, period > 0);
+        self.pairs += pairs;
         for it in 1..=settings.max_scale_iterations {
+            if outcome == Some(coarse::Correction::Skipped) {
+                // The support cannot carry the cluster marginals (the potentials it was
+                // built from are off by more than its width somewhere): rebuild it wider
+                // from the current potentials.
+                self.guards.skipped_corrections += 1;
+                if width < MAX_WIDTH {
+                    width *= 2.0;
+                    threshold *= 2.0;
+                    sup = self.support(f, g, threshold);
+                    self.guards.widened_supports += 1;
+                }
+            }
             let (ft, pairs) = softmin(fx, fy, &sup.rows, g, eps, Some(Cut { own: f, threshold }));
             let err = row_marginal_error(f, &ft, eps);
             relax(f, &ft, omega);
@@ -160,10 +175,15 @@ impl Loop<'_> {
             if err <= tolerance || it == settings.max_scale_iterations {
                 break;
             }
-            self.pairs += g_half(f, g, period > 0 && it % period == 0);
+            let (pairs, next) = g_half(&sup, threshold, f, g, period > 0 && it % period == 0);
+            self.pairs += pairs;
+            outcome = next;
         }
     }
 }
+
+/// Most widening of a scale's support, as a multiple of `truncation · ε`.
+const MAX_WIDTH: f64 = 8.0;
 
 /// The last scale of the fine phase hands over to the polish once its marginal
 /// error is below this many `marginal_tolerance`s: corrected updates halve the
@@ -194,6 +214,7 @@ fn coarse_phase(
         settings,
         pairs: 0,
         iterations: 0,
+        guards: Guards::default(),
     };
     let (cx_cloud, cx_w) = coarse_cloud(x);
     let (cy_cloud, cy_w) = coarse_cloud(y);
@@ -261,6 +282,7 @@ pub(crate) fn solve_dual(
         settings,
         pairs,
         iterations,
+        guards: Guards::default(),
     };
     let (fx, fy) = (Level::fine(x), Level::fine(y));
 
@@ -278,6 +300,7 @@ pub(crate) fn solve_dual(
     }
     phases.add("fine", fine_start.elapsed().as_secs_f64());
     let mut dual = polish(x, y, f, g, settings, lp.pairs, lp.iterations);
+    dual.guards = lp.guards;
     phases.merge(&dual.phases);
     dual.phases = phases;
     dual
@@ -300,14 +323,15 @@ pub(crate) fn polish(
         settings,
         pairs,
         iterations,
+        guards: Guards::default(),
     };
     let (fx, fy) = (Level::fine(x), Level::fine(y));
     let start = std::time::Instant::now();
     let eps = settings.blur * settings.blur;
     let anderson = Anderson::new(settings.anderson_memory, settings.overrelaxation);
     let mut guarded = Guarded::new(anderson, &f);
-    let mut support = lp.support(&f, &g, eps);
     let threshold = settings.truncation * eps;
+    let mut support = lp.support(&f, &g, threshold);
     let mut marginal_error = f64::INFINITY;
     for round in 0..settings.max_polish_iterations {
         // One full update from f: g exact for the target marginal, then the source update.
@@ -337,7 +361,7 @@ pub(crate) fn polish(
         let restarted;
         (f, restarted) = guarded.step(&f, &ft, marginal_error);
         if !restarted && round % SUPPORT_REFRESH == SUPPORT_REFRESH - 1 {
-            support = lp.support(&f, &g, eps);
+            support = lp.support(&f, &g, threshold);
         }
     }
     if marginal_error > settings.marginal_tolerance {
@@ -363,6 +387,7 @@ pub(crate) fn polish(
         iterations: lp.iterations,
         pairs: lp.pairs,
         marginal_error,
+        guards: Guards::default(),
         phases,
     }
 }
