@@ -333,16 +333,20 @@ pub(crate) fn polish(
     let threshold = settings.truncation * eps;
     let mut support = lp.support(&f, &g, threshold);
     let mut marginal_error = f64::INFINITY;
-    for round in 0..settings.max_polish_iterations {
-        // One full update from f: g exact for the target marginal, then the source update.
-        let (gt, p1) = softmin(
+    // `g ← softmin(f)`: the target marginal exact.
+    let target_update = |support: &Support, f: &[f64], g: &[f64]| {
+        softmin(
             &fy,
             &fx,
             &support.cols,
-            &f,
+            f,
             eps,
-            Some(Cut { own: &g, threshold }),
-        );
+            Some(Cut { own: g, threshold }),
+        )
+    };
+    for round in 0..settings.max_polish_iterations {
+        // One full update from f: g exact for the target marginal, then the source update.
+        let (gt, p1) = target_update(&support, &f, &g);
         g = gt;
         let (ft, p2) = softmin(
             &fx,
@@ -366,14 +370,7 @@ pub(crate) fn polish(
     }
     if marginal_error > settings.marginal_tolerance {
         // Out of iterations: f moved after the last g update; make the target marginal exact again.
-        let (gt, pairs) = softmin(
-            &fy,
-            &fx,
-            &support.cols,
-            &f,
-            eps,
-            Some(Cut { own: &g, threshold }),
-        );
+        let (gt, pairs) = target_update(&support, &f, &g);
         lp.pairs += pairs;
         g = gt;
     }
