@@ -76,7 +76,8 @@ pub fn run(args: &CompareArgs) -> anyhow::Result<()> {
             s.image_rmse,
             s.iterations,
             s.wall_s,
-            parts.map(|x| format!("{x:.3}")).join(",")
+            // Microseconds: a tiny problem's iteration can take well under a millisecond.
+            parts.map(|x| format!("{x:.6}")).join(",")
         );
         let pe = if pe.is_empty() { "n/a".into() } else { pe };
         let _ = writeln!(
