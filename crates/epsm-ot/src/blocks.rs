@@ -224,10 +224,6 @@ pub(crate) struct PointCut {
     ranges: Vec<Range<usize>>,
     /// Bit `k`: block `k` starts where block `k − 1` ends (layout of [`Selection`]'s bits).
     continues: Vec<u64>,
-    /// Bit `k`: block `k + 1` starts where block `k` ends.
-    continued: Vec<u64>,
-    /// Every block kept, for a point that would keep none.
-    all: Selection,
 }
 
 /// What [`PointCut::select`] kept for one point.
@@ -292,8 +288,6 @@ impl PointCut {
             offset: with(),
             ranges: Vec::with_capacity(list.len()),
             continues: vec![0; list.len().div_ceil(64)],
-            continued: vec![0; list.len().div_ceil(64)],
-            all: Selection::default(),
         };
         for &j in list {
             let (c, fit) = (&clustered.clusters[j as usize], &fits[j as usize]);
@@ -308,26 +302,20 @@ impl PointCut {
             let k = cut.ranges.len();
             if cut.ranges.last().is_some_and(|r| r.end == c.range.start) {
                 cut.continues[k / 64] |= 1 << (k % 64);
-                cut.continued[(k - 1) / 64] |= 1 << ((k - 1) % 64);
             }
             cut.ranges.push(c.range.clone());
         }
-        let mut merged = Vec::new();
-        cut.ranges
-            .iter()
-            .for_each(|r| push_merged(&mut merged, r.clone()));
-        cut.all = Selection::all(list.len(), merged);
         cut
     }
 
-    /// Keeps the blocks whose bound on `c(x, y_j) − g_j` may be at most `limit`;
-    /// if there is none, keeps them all.
+    /// Keeps the blocks whose bound on `c(x, y_j) − g_j` may be at most `limit`, and
+    /// returns whether there is any (the caller decides what a point that keeps none streams).
     ///
     /// Conservative under `f32` rounding: a block is dropped only if its bound
     /// exceeds `limit` by more than [`CUT_ROUNDING`] times the magnitudes
     /// involved, far above the accumulated rounding of these few operations,
     /// so potentials of any size (clouds far apart) never cut a pair they should not.
-    pub fn select(&self, x: &Point, limit: f32, out: &mut Selection) {
+    pub fn select(&self, x: &Point, limit: f32, out: &mut Selection) -> bool {
         match simd() {
             #[cfg(target_arch = "x86_64")]
             #[allow(unsafe_code)]
@@ -342,10 +330,7 @@ impl PointCut {
             Simd::Avx2 => unsafe { self.select_avx2(x, limit, out) },
             _ => self.select_portable(x, limit, out),
         }
-        if out.ranges.is_empty() {
-            out.bits.clone_from(&self.all.bits);
-            out.ranges.clone_from(&self.all.ranges);
-        }
+        !out.ranges.is_empty()
     }
 
     /// [`Self::select_portable`] compiled for AVX-512 (selected at run time).
@@ -362,7 +347,7 @@ impl PointCut {
         self.select_portable(x, limit, out);
     }
 
-    /// The body of [`Self::select`] without the fallback: a vectorisable test, then a branch-free compaction.
+    /// The body of [`Self::select`]: a vectorisable test, then a branch-free compaction.
     #[inline(always)]
     fn select_portable(&self, x: &Point, limit: f32, out: &mut Selection) {
         let n = self.ranges.len();
@@ -394,8 +379,8 @@ impl PointCut {
             let slack = CUT_ROUNDING * (dd + tilt + offset[k].abs() + limit.abs());
             keep[k] = dd - tilt - offset[k] <= limit + slack;
         }
-        // Bit masks: a kept block opens a range unless it continues the previous kept
-        // block, and closes it unless the next block continues it.
+        // Bit masks: a kept block opens a range unless it joins the previous kept block
+        // (continues it), and closes it unless the next block joins it.
         out.bits.clear();
         out.bits.extend(keep.chunks(64).map(|chunk| {
             let mut word = 0u64;
@@ -405,13 +390,19 @@ impl PointCut {
             word
         }));
         let words = &out.bits;
-        let opens = |w: usize| {
+        let joins = |w: usize| {
             let previous = (words[w] << 1) | if w > 0 { words[w - 1] >> 63 } else { 0 };
-            words[w] & !(previous & self.continues[w])
+            words[w] & previous & self.continues[w]
         };
+        let opens = |w: usize| words[w] & !joins(w);
         let closes = |w: usize| {
-            let next = (words[w] >> 1) | words.get(w + 1).map_or(0, |v| v << 63);
-            words[w] & !(next & self.continued[w])
+            let joined = (joins(w) >> 1)
+                | if w + 1 < words.len() {
+                    joins(w + 1) << 63
+                } else {
+                    0
+                };
+            words[w] & !joined
         };
         out.ranges.clear();
         let starts = (0..words.len()).flat_map(|w| word_bits(w, opens(w)));
@@ -654,18 +645,5 @@ mod tests {
         // 30ε; the slack then keeps every block (no cut, but no wrong one either).
         let far = translated(&t, [0.0, 0.0, 0.0, 1000.0, 0.0]);
         check_cut(&s, &far, 2000.0, false);
-    }
-
-    #[test]
-    fn a_point_that_keeps_nothing_streams_every_block() {
-        let (s, t) = blobs_pair(512, 2).unwrap_or_else(|| panic!("fixture"));
-        let y = Clustered::new(&t, 16);
-        let fits = fit_potentials(&y, &vec![0.0; t.len()]);
-        let list: Vec<u32> = (0..y.clusters.len() as u32).collect();
-        let cut = PointCut::gather(&y, &fits, &list);
-        let mut selection = Selection::default();
-        cut.select(&s.point(0), -1.0, &mut selection);
-        assert_eq!(selection.kept().count(), list.len());
-        assert_eq!(selection.ranges, vec![0..t.len()]);
     }
 }

@@ -130,8 +130,8 @@ impl Loop<'_> {
         let settings = self.settings;
         let omega = settings.annealing_overrelaxation;
         let period = settings.coarse_period;
-        // Support and per-point cut keep reduced costs up to `width · truncation · ε`.
-        let mut width = 1.0;
+        // Support and per-point cut keep reduced costs up to `threshold`: `truncation · ε`,
+        // widened up to `MAX_WIDTH` times that.
         let mut threshold = settings.truncation * eps;
         let mut sup = self.support(f, g, threshold);
         let g_half =
@@ -160,8 +160,7 @@ impl Loop<'_> {
                 // built from are off by more than its width somewhere): rebuild it wider
                 // from the current potentials.
                 self.guards.skipped_corrections += 1;
-                if width < MAX_WIDTH {
-                    width *= 2.0;
+                if threshold < MAX_WIDTH * settings.truncation * eps {
                     threshold *= 2.0;
                     sup = self.support(f, g, threshold);
                     self.guards.widened_supports += 1;

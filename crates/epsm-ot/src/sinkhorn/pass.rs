@@ -70,23 +70,30 @@ impl<'a> Fitted<'a> {
 /// The target ranges one source block streams, cut per point when the pass has a [`Cut`].
 struct Targets<'a> {
     cut: Option<(PointCut, Cut<'a>)>,
-    /// The current point's blocks (the whole list when there is no cut).
+    /// Every listed block, for a pass without a cut and for a point whose cut keeps none.
+    all: Selection,
+    /// The current point's blocks.
     now: Selection,
 }
 
 impl<'a> Targets<'a> {
     fn new(y: &Level, list: &[u32], fitted: Option<&Fitted<'a>>) -> Self {
-        let now = Selection::all(list.len(), merged_ranges(&y.ranges, list));
+        let all = Selection::all(list.len(), merged_ranges(&y.ranges, list));
         Self {
             cut: fitted.map(|f| (PointCut::gather(f.clustered, &f.fits, list), f.cut)),
-            now,
+            now: all.clone(),
+            all,
         }
     }
 
-    /// Selects the blocks source point `i` at `x` streams.
+    /// Selects the blocks source point `i` at `x` streams: those its cut keeps, or
+    /// every block if it keeps none.
     fn point(&mut self, i: usize, x: &Point) {
         if let Some((bounds, cut)) = &self.cut {
-            bounds.select(x, (cut.own[i] + cut.threshold) as f32, &mut self.now);
+            let limit = (cut.own[i] + cut.threshold) as f32;
+            if !bounds.select(x, limit, &mut self.now) {
+                self.now.clone_from(&self.all);
+            }
         }
     }
 
@@ -368,6 +375,24 @@ mod tests {
     use crate::cost::diameter_sq;
     use crate::sinkhorn::solve_dual;
     use crate::synthetic::blobs_pair;
+
+    #[test]
+    fn a_point_that_keeps_nothing_streams_every_block() {
+        let (s, t) = blobs_pair(512, 2).unwrap_or_else(|| panic!("fixture"));
+        let (cx, cy) = (Clustered::new(&s, 16), Clustered::new(&t, 16));
+        let y = Level::fine(&cy);
+        let own = vec![-1.0; s.len()];
+        let cut = Cut {
+            own: &own,
+            threshold: 0.0,
+        };
+        let fitted = Fitted::new(&y, &vec![0.0; t.len()], Some(cut));
+        let list: Vec<u32> = (0..cy.clusters.len() as u32).collect();
+        let mut targets = Targets::new(&y, &list, fitted.as_ref());
+        targets.point(0, &cx.cloud.point(0));
+        assert_eq!(targets.kept().count(), list.len());
+        assert_eq!(targets.ranges().to_vec(), vec![0..t.len()]);
+    }
 
     #[test]
     fn cut_passes_match_uncut_passes_with_fewer_pairs() {
