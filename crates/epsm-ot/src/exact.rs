@@ -31,7 +31,7 @@
 //! | `exact.dense_below`    | use the dense O(n³) solver below this n    | 64      |
 //! | `exact.candidates`     | candidate targets per point (and sources per target) | 8 |
 //! | `exact.tolerance`      | reduced cost counted as a violation below −tolerance | 1e-11 |
-//! | `exact.auction_start`  | first ε of the auction                     | 1e-2    |
+//! | `exact.auction_start`  | first ε of the auction                     | 0.1     |
 //! | `exact.auction_end`    | last ε of the auction                      | 1e-9    |
 //! | `exact.warm_start`     | Sinkhorn settings of the warm start        | blur 0.03, one update per scale, ≤ 10 polish updates |
 
@@ -84,7 +84,7 @@ impl Default for ExactSettings {
                 coarse_period: 0,
                 ..SinkhornSettings::default()
             },
-            auction_start: 1e-2,
+            auction_start: 0.1,
             auction_end: 1e-9,
         }
     }
@@ -178,7 +178,7 @@ pub(crate) struct SortedAssignment {
 pub(crate) struct Prices {
     /// Candidate edges per sorted source point: (sorted target, cost).
     pub edges: Vec<Vec<(u32, f64)>>,
-    /// Column potentials (the negated auction prices, or the warm start's `g` if the auction gave up).
+    /// Column potentials (the negated auction prices).
     pub v: Vec<f64>,
     /// Work counters and phase times so far.
     pub stats: SolveStats,
@@ -247,10 +247,12 @@ pub(crate) fn solve_sorted(
     let mut lsap = SparseAssignment::new(edges, v);
     loop {
         stats.iterations += 1;
-        if lsap.free_rows().len() * REPRICE_BELOW > n {
+        if stats.iterations > 1 && lsap.free_rows().len() * REPRICE_BELOW > n {
             // Many rows are free (added violated edges unmatch their rows): re-price
             // all rows by auction from the current prices, far cheaper than one
             // shortest-augmenting-path search per free row from poor potentials.
+            // (Not on the first round: its prices come fresh from an auction, and
+            // the rows its greedy start leaves free are each a short search.)
             let (edges, v) = lsap.into_parts();
             let v = phases.time("auction", || auction_potentials(&edges, v, settings));
             lsap = SparseAssignment::new(edges, v);
@@ -306,24 +308,25 @@ pub(crate) fn solve_sorted(
     }
 }
 
-/// Column potentials from an ε-scaling auction on `edges` started at prices `−v`
-/// (`v` itself if the auction runs out of bids).
+/// Column potentials from an ε-scaling auction on `edges` started at prices `−v`.
+///
+/// If a phase runs out of bids the prices reached so far are returned: they
+/// only rose from `−v` and are ε-complementary for every row assigned at
+/// that point, and the exact finish accepts any potentials.
 fn auction_potentials(
     edges: &[Vec<(u32, f64)>],
     v: Vec<f64>,
     settings: &ExactSettings,
 ) -> Vec<f64> {
     let mut q: Vec<f64> = v.iter().map(|&t| -t).collect();
-    match auction::run(
+    auction::run(
         edges,
         &mut q,
         settings.auction_start,
         settings.auction_end,
         0.2,
-    ) {
-        Some(_) => q.iter().map(|&t| -t).collect(),
-        None => v,
-    }
+    );
+    q.iter().map(|&t| -t).collect()
 }
 
 /// Each check adds this many times `candidates` worst violators per row (fewer, costlier rounds otherwise).

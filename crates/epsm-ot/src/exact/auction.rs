@@ -10,29 +10,31 @@
 
 const NONE: u32 = u32::MAX;
 
-/// Runs the auction from prices `q` (updated in place); returns the final row → column
-/// assignment, or `None` if the bid budget ran out (e.g. the graph has no perfect matching).
+/// Runs the auction from prices `q`, raising them in place; `false` if a phase ran out
+/// of its bid budget (a price war, or a graph without a perfect matching).
+///
+/// The prices only rise, and every bid leaves its bidder within ε of its best
+/// column, so the prices reached when the budget runs out are still a better
+/// start for the exact finish than the ones the auction began with.
 pub(crate) fn run(
     edges: &[Vec<(u32, f64)>],
     q: &mut [f64],
     eps_start: f64,
     eps_end: f64,
     factor: f64,
-) -> Option<Vec<u32>> {
+) -> bool {
     let n = edges.len();
     let budget = 200 * n + 10_000;
     let mut eps = eps_start.max(eps_end);
     let mut owner = vec![NONE; n];
-    let mut col_of = vec![NONE; n];
     loop {
         owner.fill(NONE);
-        col_of.fill(NONE);
         let mut queue: Vec<u32> = (0..n as u32).rev().collect();
         let mut bids = 0usize;
         while let Some(i) = queue.pop() {
             bids += 1;
             if bids > budget {
-                return None;
+                return false;
             }
             let (mut j1, mut r1, mut r2) = (NONE, f64::INFINITY, f64::INFINITY);
             for &(j, c) in &edges[i as usize] {
@@ -44,21 +46,45 @@ pub(crate) fn run(
                 }
             }
             if j1 == NONE {
-                return None;
+                return false;
             }
             let gap = if r2.is_finite() { r2 - r1 } else { 1.0 };
             q[j1 as usize] += gap + eps;
             let previous = owner[j1 as usize];
             if previous != NONE {
-                col_of[previous as usize] = NONE;
                 queue.push(previous);
             }
             owner[j1 as usize] = i;
-            col_of[i as usize] = j1;
         }
         if eps <= eps_end {
-            return Some(col_of);
+            return true;
         }
         eps = (eps * factor).max(eps_end);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn prices_reach_complementary_slackness_or_the_budget_stops_a_price_war() {
+        // Two rows, two columns, a unique optimum 0 → 0, 1 → 1.
+        let edges = vec![vec![(0, 0.0), (1, 1.0)], vec![(0, 0.5), (1, 0.6)]];
+        let mut q = vec![0.0; 2];
+        assert!(run(&edges, &mut q, 0.1, 1e-9, 0.2));
+        // ε-complementary slackness of the optimum at the final ε.
+        assert!(edges[0][0].1 + q[0] <= edges[0][1].1 + q[1] + 1e-9);
+        assert!(edges[1][1].1 + q[1] <= edges[1][0].1 + q[0] + 1e-9);
+        // Three rows that all want column 0 only: no perfect matching, so the
+        // bids run out; the prices rose from where they started and stay finite.
+        let edges = vec![
+            vec![(0, 0.0)],
+            vec![(0, 0.1)],
+            vec![(0, 0.2), (1, 5.0), (2, 5.0)],
+        ];
+        let mut q = vec![0.0; 3];
+        assert!(!run(&edges, &mut q, 0.1, 1e-9, 0.2));
+        assert!(q[0] > 0.0 && q.iter().all(|p| p.is_finite()));
     }
 }
