@@ -88,10 +88,9 @@ pub struct SolveStats {
     pub added_pairs: usize,
     /// L1 marginal error of the plan (entropic solver).
     pub marginal_error: Option<f64>,
-    /// Coarse corrections skipped because the cluster scaling did not converge (entropic solver).
-    pub skipped_corrections: usize,
-    /// Supports rebuilt wider after such a skip (entropic solver).
-    pub widened_supports: usize,
+    /// Coarse corrections whose cluster scaling did not converge, applied clamped
+    /// before the scale's support was rebuilt (entropic solver).
+    pub clamped_corrections: usize,
     /// Wall-clock seconds of the named phases of the solve, in the order they first ran.
     pub phases: PhaseTimes,
 }

@@ -279,8 +279,7 @@ pub fn solve(
         iterations: xy.dual.iterations,
         pair_evaluations: xy.pairs,
         marginal_error: Some(xy.dual.marginal_error),
-        skipped_corrections: xy.dual.guards.skipped_corrections,
-        widened_supports: xy.dual.guards.widened_supports,
+        clamped_corrections: xy.dual.guards.clamped_corrections,
         ..SolveStats::default()
     };
     let (loss, pull) = if settings.debias {
@@ -289,8 +288,7 @@ pub fn solve(
         stats.iterations += xx.dual.iterations + yy.dual.iterations;
         stats.pair_evaluations += xx.pairs + yy.pairs;
         for guards in [xx.dual.guards, yy.dual.guards] {
-            stats.skipped_corrections += guards.skipped_corrections;
-            stats.widened_supports += guards.widened_supports;
+            stats.clamped_corrections += guards.clamped_corrections;
         }
         phases.merge(&xx.dual.phases);
         phases.merge(&yy.dual.phases);

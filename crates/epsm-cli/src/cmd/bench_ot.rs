@@ -16,8 +16,7 @@
 //! | `iterations`       | Sinkhorn updates / exact re-solve rounds / projections      |
 //! | `pair_evaluations` | kernel or cost evaluations                                  |
 //! | `pair_evals_per_s` | `pair_evaluations / seconds` (sinkhorn), else null          |
-//! | `skipped_corrections` | coarse corrections skipped (cluster scaling not converged; sinkhorn) |
-//! | `widened_supports` | scale supports rebuilt wider after a skipped correction (sinkhorn) |
+//! | `clamped_corrections` | coarse corrections whose cluster scaling did not converge, applied clamped before the scale's support was rebuilt (sinkhorn) |
 //! | `peak_rss_mb`      | peak resident memory of the process (VmHWM)                 |
 //! | `threads`          | rayon threads                                               |
 //! | `phases`           | seconds per named phase of the solve (see below)            |
@@ -86,8 +85,7 @@ struct Report {
     iterations: usize,
     pair_evaluations: u64,
     pair_evals_per_s: Option<f64>,
-    skipped_corrections: usize,
-    widened_supports: usize,
+    clamped_corrections: usize,
     peak_rss_mb: Option<f64>,
     threads: usize,
     phases: BTreeMap<&'static str, f64>,
@@ -129,8 +127,7 @@ pub fn run(args: &OtBenchArgs) -> anyhow::Result<()> {
         iterations: result.stats.iterations,
         pair_evaluations: pairs,
         pair_evals_per_s: (args.solver == OtSolver::Sinkhorn).then(|| pairs as f64 / seconds),
-        skipped_corrections: result.stats.skipped_corrections,
-        widened_supports: result.stats.widened_supports,
+        clamped_corrections: result.stats.clamped_corrections,
         peak_rss_mb: super::peak_rss_mb(),
         threads: rayon::current_num_threads(),
         phases: result.stats.phases.iter().collect(),

@@ -60,10 +60,9 @@ pub(crate) struct Dual {
 /// Counts of the fine phase's safeguards.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub(crate) struct Guards {
-    /// Coarse corrections skipped because the cluster scaling did not converge.
-    pub skipped_corrections: usize,
-    /// Times a scale's support was rebuilt wider after such a skip.
-    pub widened_supports: usize,
+    /// Coarse corrections whose cluster scaling did not converge, applied clamped
+    /// (each followed by a rebuild of the scale's support; see `coarse`).
+    pub clamped_corrections: usize,
 }
 
 /// The ε schedule of GeomLoss: `diameter²` down to `blur²` with ratio `scaling²`.
@@ -130,9 +129,8 @@ impl Loop<'_> {
         let settings = self.settings;
         let omega = settings.annealing_overrelaxation;
         let period = settings.coarse_period;
-        // Support and per-point cut keep reduced costs up to `threshold`: `truncation · ε`,
-        // widened up to `MAX_WIDTH` times that.
-        let mut threshold = settings.truncation * eps;
+        // Support and per-point cut keep reduced costs up to `threshold`.
+        let threshold = settings.truncation * eps;
         let mut sup = self.support(f, g, threshold);
         let g_half =
             |sup: &Support, threshold: f64, f: &mut [f64], g: &mut [f64], correct: bool| {
@@ -142,7 +140,16 @@ impl Loop<'_> {
                     let next = |j: usize, t: f64| g[j] + omega * (t - g[j]);
                     let pass = softmin_blocks(fy, fx, &sup.cols, f, eps, next, cut);
                     relax(g, &pass.softmin, omega);
-                    let outcome = coarse::correct(fy, fx, &sup.cols, &pass.log_masses, g, f, eps);
+                    let outcome = coarse::correct(
+                        fy,
+                        fx,
+                        &sup.cols,
+                        &pass.log_masses,
+                        g,
+                        f,
+                        eps,
+                        settings.truncation,
+                    );
                     (pass.pairs, Some(outcome))
                 } else {
                     let (gt, pairs) = softmin(fy, fx, &sup.cols, f, eps, cut);
@@ -155,16 +162,12 @@ impl Loop<'_> {
         let (pairs, mut outcome) = g_half(&sup, threshold, f, g, period > 0);
         self.pairs += pairs;
         for it in 1..=settings.max_scale_iterations {
-            if outcome == Some(coarse::Correction::Skipped) {
-                // The support cannot carry the cluster marginals (the potentials it was
-                // built from are off by more than its width somewhere): rebuild it wider
-                // from the current potentials.
-                self.guards.skipped_corrections += 1;
-                if threshold < MAX_WIDTH * settings.truncation * eps {
-                    threshold *= 2.0;
-                    sup = self.support(f, g, threshold);
-                    self.guards.widened_supports += 1;
-                }
+            if outcome == Some(coarse::Correction::Clamped) {
+                // The support could not carry the cluster marginals; the clamped shift moved
+                // the clusters that lacked mass towards the pairs outside it: rebuild it from
+                // the shifted potentials.
+                self.guards.clamped_corrections += 1;
+                sup = self.support(f, g, threshold);
             }
             let (ft, pairs) = softmin(fx, fy, &sup.rows, g, eps, Some(Cut { own: f, threshold }));
             let err = row_marginal_error(f, &ft, eps);
@@ -180,9 +183,6 @@ impl Loop<'_> {
         }
     }
 }
-
-/// Most widening of a scale's support, as a multiple of `truncation · ε`.
-const MAX_WIDTH: f64 = 8.0;
 
 /// The last scale of the fine phase hands over to the polish once its marginal
 /// error is below this many `marginal_tolerance`s: corrected updates halve the
