@@ -146,7 +146,9 @@ fn camera_pose() {
     check("camera.yaw", 0.05, PrimaryMotion::OnCameraRay);
     check("camera.pitch", 0.05, PrimaryMotion::OnCameraRay);
     check("camera.translate.z", 1e-3, PrimaryMotion::OnCameraRay);
-    check("camera.translate.x", 1e-3, PrimaryMotion::Attached);
+    // The pixel-attached vertices' terms are `f32`: at a 1e-3 step about one
+    // path in ten has a difference still limited by rounding.
+    check("camera.translate.x", 4e-3, PrimaryMotion::Attached);
 }
 
 /// `ior`: the weight of each dielectric lobe over its fixed choice

@@ -7,16 +7,27 @@
 //! Samples are stratified per dimension (Latin hypercube): for a pixel with
 //! `spp` samples, dimension `d` of sample `s` falls in stratum
 //! `π_d(s)` of `[0, 1)` split into `spp` equal strata, where `π_d` is a
-//! hashed permutation (Kensler, "Correlated Multi-Jittered Sampling", Pixar
-//! TM 13-01, 2013) and the position inside the stratum is a hashed jitter.
-//! Each 1-D projection is thereby evenly covered while dimensions stay
-//! decorrelated. Only the first [`STRATIFIED_DIMENSIONS`] dimensions (the
-//! film position and the first bounce, where stratification pays) use the
-//! permutation; later dimensions are independent hashed numbers, several
+//! hashed permutation and the position inside the stratum is a hashed
+//! jitter. Each 1-D projection is thereby evenly covered while dimensions
+//! stay decorrelated. Only the first [`STRATIFIED_DIMENSIONS`] dimensions
+//! (the film position and the first bounce, where stratification pays) use
+//! the permutation; later dimensions are independent hashed numbers, several
 //! times cheaper.
 //!
-//! Cost: the permutation of each stratified dimension is chosen by a hash of
-//! `(seed, pixel, dimension)` that does not depend on the sample;
+//! The permutation works on `k`-bit numbers, `2^k` the smallest power of two
+//! `≥ spp`: three rounds of `x ← ((x ⊕ key) · odd) mod 2^k` and a xorshift
+//! `x ← x ⊕ (x >> r)` (each a bijection of `0..2^k`), with shifts `r` of
+//! about `k/2` and `k/4` so that high bits reach the low ones (multiplying
+//! only carries low bits up), and two of the three odd multipliers drawn
+//! from the dimension's hash. For `spp` not a
+//! power of two, indices that land at or past `spp` are permuted again
+//! (cycle-walking, as in Kensler, "Correlated Multi-Jittered Sampling",
+//! Pixar TM 13-01, 2013, whose 16-step hash this replaces at about a third
+//! of the cost). Pairs of stratified dimensions look like those of random
+//! permutations (tested for 16–256 strata).
+//!
+//! Cost: the permutation keys of each stratified dimension come from a hash
+//! of `(seed, pixel, dimension)` that does not depend on the sample;
 //! [`PixelKeys`] computes those once per pixel for all its samples. Every
 //! other bit of randomness (the stratified jitters and all later numbers) is
 //! one multiply–xorshift of a Weyl step `k + (d + 1)·φ` from a per-sample
@@ -28,36 +39,98 @@
 
 use glam::Vec2;
 
-/// The sample-independent hashes of one pixel's stratified dimensions,
-/// computed once and shared by the pixel's samples.
-#[derive(Clone, Copy, Debug, Default)]
+/// The sample-independent part of one pixel's streams (its stratified
+/// dimensions' permutation keys and the stratum count), computed once and
+/// shared by the pixel's samples.
+#[derive(Clone, Copy, Debug)]
 pub struct PixelKeys {
     key: u64,
-    strata: [u32; STRATIFIED_DIMENSIONS as usize],
+    /// The permutation keys of each stratified dimension.
+    strata: [Scramble; STRATIFIED_DIMENSIONS as usize],
+    /// Strata per dimension (the samples per pixel), `≥ 1`.
+    count: u32,
+    /// `2^k − 1`, `2^k` the smallest power of two `≥ count`.
+    mask: u32,
+    /// The xorshift amounts of the permutation's three rounds:
+    /// `⌊k/2⌋ + 1`, `⌊k/4⌋` and `⌈k/2⌉`, each clamped to `1..=max(k − 1, 1)`.
+    shifts: [u32; 3],
+    /// `1 / count`.
+    inv_count: f32,
+}
+
+/// The keys of one dimension's stratum permutation ([`PixelKeys::stratum`]).
+#[derive(Clone, Copy, Debug, Default)]
+struct Scramble {
+    /// Xored into the index at the start of each of the three rounds.
+    xor: [u32; 3],
+    /// The odd multipliers of the first two rounds.
+    mul: [u32; 2],
+}
+
+impl Scramble {
+    /// The keys drawn from a dimension's 64-bit hash.
+    fn new(h: u64) -> Self {
+        let (a, b) = (h as u32, (h >> 32) as u32);
+        Self {
+            xor: [a, b >> 16, a >> 16],
+            mul: [b | 1, (a >> 8) | 1],
+        }
+    }
 }
 
 impl PixelKeys {
     /// The keys of pixel `pixel` (a linear index, e.g. `y·width + x`) under
-    /// `seed`.
+    /// `seed`, for `spp` samples (0 counts as 1).
     #[inline]
-    pub fn new(seed: u32, pixel: u32) -> Self {
+    pub fn new(seed: u32, pixel: u32, spp: u32) -> Self {
         let key = pixel_key(seed, pixel);
-        let mut strata = [0; STRATIFIED_DIMENSIONS as usize];
-        for (d, h) in (0..).zip(&mut strata) {
-            *h = dim_hash(key, d) as u32;
+        let mut strata = [Scramble::default(); STRATIFIED_DIMENSIONS as usize];
+        for (d, s) in (0..).zip(&mut strata) {
+            *s = Scramble::new(dim_hash(key, d));
         }
-        Self { key, strata }
+        let count = spp.max(1);
+        let mask = count
+            .checked_next_power_of_two()
+            .map_or(u32::MAX, |p| p - 1);
+        let k = mask.count_ones();
+        let shift = |r: u32| r.clamp(1, k.saturating_sub(1).max(1));
+        Self {
+            key,
+            strata,
+            count,
+            mask,
+            shifts: [shift(k / 2 + 1), shift(k / 4), shift(k.div_ceil(2))],
+            inv_count: 1.0 / count as f32,
+        }
     }
 
-    /// The stream of sample `sample` (of `spp`) of this pixel.
+    /// The stream of sample `sample` (`< spp`) of this pixel.
     #[inline]
-    pub fn sampler(&self, sample: u32, spp: u32) -> PixelSampler<'_> {
+    pub fn sampler(&self, sample: u32) -> PixelSampler<'_> {
         PixelSampler {
-            strata: &self.strata,
+            keys: self,
             sample_key: mix64(self.key ^ u64::from(sample).wrapping_mul(SAMPLE_STEP)),
             sample,
-            spp: spp.max(1),
             dim: 0,
+        }
+    }
+
+    /// Stratum `π(i)` of sample `i < count` under the permutation keyed by
+    /// `s` (module docs): three rounds on `0..=mask`, walked again while the
+    /// result is `≥ count`.
+    #[inline(always)]
+    fn stratum(&self, mut i: u32, s: &Scramble) -> u32 {
+        let [r0, r1, r2] = self.shifts;
+        loop {
+            i = (i ^ s.xor[0]).wrapping_mul(s.mul[0]) & self.mask;
+            i ^= i >> r0;
+            i = (i ^ s.xor[1]).wrapping_mul(s.mul[1]) & self.mask;
+            i ^= i >> r1;
+            i = (i ^ s.xor[2]).wrapping_mul(0x6935_FA69) & self.mask;
+            i ^= i >> r2;
+            if i < self.count {
+                return i;
+            }
         }
     }
 }
@@ -65,12 +138,12 @@ impl PixelKeys {
 /// The random stream of one pixel sample.
 #[derive(Clone, Copy, Debug)]
 pub struct PixelSampler<'a> {
-    /// The pixel's hashes of the stratified dimensions ([`PixelKeys`]).
-    strata: &'a [u32; STRATIFIED_DIMENSIONS as usize],
-    /// The per-sample key of the dimensions past the stratified ones.
+    /// The pixel's sample-independent keys ([`PixelKeys`]).
+    keys: &'a PixelKeys,
+    /// The per-sample key of the jitters and of the dimensions past the
+    /// stratified ones.
     sample_key: u64,
     sample: u32,
-    spp: u32,
     dim: u32,
 }
 
@@ -87,12 +160,13 @@ impl PixelSampler<'_> {
     pub fn next_1d(&mut self) -> f32 {
         let dim = self.dim;
         self.dim += 1;
-        let Some(&h) = self.strata.get(dim as usize) else {
+        let keys = self.keys;
+        let Some(scramble) = keys.strata.get(dim as usize) else {
             return to_unit(weyl_mix(self.sample_key, dim));
         };
-        let stratum = permute(self.sample, self.spp, h);
+        let stratum = keys.stratum(self.sample, scramble);
         let jitter = to_unit(weyl_mix(self.sample_key, dim));
-        ((stratum as f32 + jitter) / self.spp as f32).min(ONE_MINUS_EPSILON)
+        ((stratum as f32 + jitter) * keys.inv_count).min(ONE_MINUS_EPSILON)
     }
 
     /// The next two numbers in `[0, 1)²`.
@@ -120,7 +194,7 @@ fn pixel_key(seed: u32, pixel: u32) -> u64 {
 }
 
 /// The sample-independent hash of dimension `dim` of the pixel with `key`
-/// (its low half chooses the dimension's permutation).
+/// (it keys the dimension's permutation).
 #[inline]
 fn dim_hash(key: u64, dim: u32) -> u64 {
     mix64(key ^ u64::from(dim).wrapping_mul(GOLDEN))
@@ -149,61 +223,22 @@ fn mix64(mut z: u64) -> u64 {
     z ^ (z >> 31)
 }
 
-/// Element `i` of a pseudo-random permutation of `0..l` chosen by `p`
-/// (Kensler 2013, cycle-walking over the next power of two).
-#[inline]
-fn permute(mut i: u32, l: u32, p: u32) -> u32 {
-    if l <= 1 {
-        return 0;
-    }
-    let mut w = l - 1;
-    w |= w >> 1;
-    w |= w >> 2;
-    w |= w >> 4;
-    w |= w >> 8;
-    w |= w >> 16;
-    loop {
-        i ^= p;
-        i = i.wrapping_mul(0xE170_893D);
-        i ^= p >> 16;
-        i ^= (i & w) >> 4;
-        i ^= p >> 8;
-        i = i.wrapping_mul(0x0929_EB3F);
-        i ^= p >> 23;
-        i ^= (i & w) >> 1;
-        i = i.wrapping_mul(1 | (p >> 27));
-        i = i.wrapping_mul(0x6935_FA69);
-        i ^= (i & w) >> 11;
-        i = i.wrapping_mul(0x74DC_B303);
-        i ^= (i & w) >> 2;
-        i = i.wrapping_mul(0x9E50_1CC3);
-        i ^= (i & w) >> 2;
-        i = i.wrapping_mul(0xC860_A3DF);
-        i &= w;
-        i ^= i >> 5;
-        if i < l {
-            break;
-        }
-    }
-    // `% l` is a division; for a power of two `l` (then `w = l − 1`) the
-    // mask gives the same value.
-    let i = i.wrapping_add(p);
-    if w == l - 1 { i & w } else { i % l }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
     fn permutations_are_bijections() {
-        for l in [1u32, 2, 3, 7, 16, 17, 64, 100] {
-            for p in [0u32, 1, 0xDEAD_BEEF, 12345] {
-                let mut seen = vec![false; l as usize];
-                for i in 0..l {
-                    let j = permute(i, l, p) as usize;
-                    assert!(!seen[j], "l={l} p={p}: {j} twice");
-                    seen[j] = true;
+        for count in [1u32, 2, 3, 7, 16, 17, 64, 100, 256] {
+            for pixel in [0u32, 1, 0xDEAD_BEEF, 12345] {
+                let keys = PixelKeys::new(9, pixel, count);
+                for scramble in &keys.strata {
+                    let mut seen = vec![false; count as usize];
+                    for i in 0..count {
+                        let j = keys.stratum(i, scramble) as usize;
+                        assert!(!seen[j], "count {count}, pixel {pixel}: {j} twice");
+                        seen[j] = true;
+                    }
                 }
             }
         }
@@ -211,18 +246,70 @@ mod tests {
 
     #[test]
     fn every_dimension_is_stratified_over_the_pixel_samples() {
-        let spp = 37;
-        for dim in 0..STRATIFIED_DIMENSIONS {
-            let mut strata = vec![0u32; spp as usize];
-            for s in 0..spp {
-                let keys = PixelKeys::new(7, 1234);
-                let mut r = keys.sampler(s, spp);
-                r.set_dimension(dim);
-                let x = r.next_1d();
-                assert!((0.0..1.0).contains(&x));
-                strata[(x * spp as f32) as usize] += 1;
+        for (spp, pixel) in [(37, 1234), (64, 99), (100, 5)] {
+            let keys = PixelKeys::new(7, pixel, spp);
+            for dim in 0..STRATIFIED_DIMENSIONS {
+                let mut strata = vec![0u32; spp as usize];
+                for s in 0..spp {
+                    let mut r = keys.sampler(s);
+                    r.set_dimension(dim);
+                    let x = r.next_1d();
+                    assert!((0.0..1.0).contains(&x));
+                    strata[(x * spp as f32) as usize] += 1;
+                }
+                assert!(
+                    strata.iter().all(|&c| c == 1),
+                    "{spp} spp, dim {dim}: {strata:?}"
+                );
             }
-            assert!(strata.iter().all(|&c| c == 1), "dim {dim}: {strata:?}");
+        }
+    }
+
+    /// Two stratified dimensions of a pixel's samples fill a coarse grid
+    /// (high bits of the two strata) and a fine one (low bits) about as two
+    /// random permutations would: the mean χ² over many pixels is within
+    /// 15 % of its expectation under random permutations (measured: +4 %
+    /// and +10 % at 16 strata, under 2 % at 64 and 256; a permutation that
+    /// leaks its low bits or repeats across dimensions is off by 1.5–10×).
+    /// Each row of cells holds a fixed number of samples, so a cell count is
+    /// hypergeometric (drawing a row's samples out of all, the column's
+    /// being successes).
+    #[test]
+    fn stratified_pairs_look_like_random_permutations() {
+        let pixels = 1000;
+        for (spp, grid) in [(16u32, 4u32), (64, 8), (256, 16)] {
+            let (n, g) = (spp as f64, grid as f64);
+            let per_row = n / g;
+            let mean = per_row * per_row / n;
+            let var = per_row * (per_row / n) * (1.0 - per_row / n) * (n - per_row) / (n - 1.0);
+            let expected = g * g * var / mean;
+            let (mut coarse, mut fine) = (0.0, 0.0);
+            let pairs = [(0, 1), (2, 3), (3, 4), (5, 6), (0, 8)];
+            for pixel in 0..pixels {
+                let keys = PixelKeys::new(11, pixel, spp);
+                for (da, db) in pairs {
+                    let mut cells = vec![[0.0f64; 2]; (grid * grid) as usize];
+                    for s in 0..spp {
+                        let sa = keys.stratum(s, &keys.strata[da]);
+                        let sb = keys.stratum(s, &keys.strata[db]);
+                        cells[(sa / (spp / grid) * grid + sb / (spp / grid)) as usize][0] += 1.0;
+                        cells[(sa % grid * grid + sb % grid) as usize][1] += 1.0;
+                    }
+                    let chi2 = |k: usize| -> f64 {
+                        cells.iter().map(|c| (c[k] - mean).powi(2) / mean).sum()
+                    };
+                    coarse += chi2(0);
+                    fine += chi2(1);
+                }
+            }
+            let trials = (pixels as usize * pairs.len()) as f64;
+            for (name, total) in [("coarse", coarse), ("fine", fine)] {
+                let got = total / trials;
+                assert!(
+                    (got / expected - 1.0).abs() < 0.15,
+                    "{spp} spp, {name} grid: mean χ² {got}, random permutations {expected}"
+                );
+            }
         }
     }
 
@@ -234,8 +321,8 @@ mod tests {
             let mut cells = [0u32; 256];
             let n = 256 * 400;
             for i in 0..n {
-                let keys = PixelKeys::new(5, i / 16);
-                let mut r = keys.sampler(i % 16, 16);
+                let keys = PixelKeys::new(5, i / 16, 16);
+                let mut r = keys.sampler(i % 16);
                 r.set_dimension(first);
                 let v = r.next_2d();
                 cells[(v.x * 16.0) as usize * 16 + (v.y * 16.0) as usize] += 1;
@@ -253,8 +340,8 @@ mod tests {
     #[test]
     fn streams_are_pure_functions_of_their_key_and_differ_between_keys() {
         let stream = |seed, pixel, sample, dim| {
-            let keys = PixelKeys::new(seed, pixel);
-            let mut r = keys.sampler(sample, 16);
+            let keys = PixelKeys::new(seed, pixel, 16);
+            let mut r = keys.sampler(sample);
             r.set_dimension(dim);
             r.next_2d()
         };
@@ -275,8 +362,8 @@ mod tests {
         for dim in [0, 12] {
             let (mut sx, mut sy, mut sxy, mut sxx, mut syy) = (0.0f64, 0.0, 0.0, 0.0, 0.0);
             for px in 0..n {
-                let keys = PixelKeys::new(3, px);
-                let mut r = keys.sampler(px % 4, 4);
+                let keys = PixelKeys::new(3, px, 4);
+                let mut r = keys.sampler(px % 4);
                 r.set_dimension(dim);
                 let v = r.next_2d();
                 let (x, y) = (v.x as f64, v.y as f64);

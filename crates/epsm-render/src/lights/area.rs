@@ -41,6 +41,8 @@ pub struct AreaEmitter {
     by_area: Option<Distribution1D>,
     /// Total world-space area.
     area: f64,
+    /// `1 / area` (zero for a degenerate object), the density of [`Self::sample`].
+    pdf_area: f64,
 }
 
 /// A uniformly sampled point on an emitter.
@@ -88,6 +90,7 @@ impl AreaEmitter {
             normals,
             by_area: Distribution1D::new(&areas),
             area,
+            pdf_area: if area > 0.0 { 1.0 / area } else { 0.0 },
         }
     }
 
@@ -96,13 +99,10 @@ impl AreaEmitter {
         mean(self.emission) * self.area * std::f64::consts::PI
     }
 
-    /// Area density `1 / area` of [`Self::sample`] (zero for a degenerate object).
+    /// Area density `1 / area` (m⁻²) of [`Self::sample`] (zero for a
+    /// degenerate object).
     pub fn pdf_area(&self) -> f64 {
-        if self.area > 0.0 {
-            1.0 / self.area
-        } else {
-            0.0
-        }
+        self.pdf_area
     }
 
     /// The unit front-face normal of `triangle`.
@@ -133,17 +133,19 @@ pub(super) fn mean(c: Vec3) -> f64 {
     (c.x as f64 + c.y as f64 + c.z as f64) / 3.0
 }
 
-/// Solid-angle density at `p` of an area density `pdf_area` at the emitter
-/// point `y` with unit normal `n`: `pdf_area · d² / |cos θ_light|` (zero when
-/// `p` lies in the emitter's plane or on `y`). Callers check the emitting side.
-pub(super) fn solid_angle_pdf(pdf_area: f64, p: Vec3, y: Vec3, n: Vec3) -> f32 {
-    let d = p - y;
-    let dist2 = d.length_squared() as f64;
-    let cos = (n.dot(d) as f64).abs() / dist2.sqrt();
-    if !(cos > 0.0 && dist2 > 0.0) {
-        return 0.0;
-    }
-    (pdf_area * dist2 / cos) as f32
+/// Solid-angle density (sr⁻¹) at `p` of an area density `pdf_area` (m⁻²) at
+/// the emitter point `y` with unit normal `n`: `pdf_area · r² / |cos θ_light|`
+/// with `r = |y − p|`, computed in `f32` as `pdf_area · r³ / |n · (y − p)|`
+/// (one square root and one division, which overlap the light sample's other
+/// work). Zero when `p` lies in the emitter's plane or on `y`. Callers check
+/// the emitting side.
+#[inline(always)]
+pub(super) fn solid_angle_pdf(pdf_area: f32, p: Vec3, y: Vec3, n: Vec3) -> f32 {
+    let d = y - p;
+    let dist2 = d.length_squared();
+    let pdf = pdf_area * dist2 * dist2.sqrt() / n.dot(d).abs();
+    // In the plane or on `y`, `n · d = 0` makes the quotient ∞ or NaN.
+    if pdf < f32::INFINITY { pdf } else { 0.0 }
 }
 
 /// Whether `p` sees the emitting (front) side of a surface at `y` with front normal `n`.

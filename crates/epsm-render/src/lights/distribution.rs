@@ -108,14 +108,19 @@ impl Distribution1D {
                 u_remapped: u.min(1.0 - f64::EPSILON),
             };
         }
-        let upper = if self.cdf.len() <= LINEAR_SEARCH_MAX {
-            // The same index as the binary search, without its unpredictable
-            // branches (light and triangle selection over a few entries).
-            self.cdf.iter().map(|&c| usize::from(c <= u)).sum()
+        let n = self.func.len();
+        let mut index = if self.cdf.len() <= LINEAR_SEARCH_MAX {
+            // The same index as the binary search below, without its
+            // unpredictable branches (light and triangle selection over a few
+            // entries): `cdf[0] = 0 ≤ u` and `cdf[n] = 1` need no test, so
+            // only the inner boundaries are counted.
+            self.cdf[1..n].iter().map(|&c| usize::from(c <= u)).sum()
         } else {
-            self.cdf.partition_point(|&c| c <= u)
+            self.cdf
+                .partition_point(|&c| c <= u)
+                .saturating_sub(1)
+                .min(n - 1)
         };
-        let mut index = upper.saturating_sub(1).min(self.func.len() - 1);
         while self.func[index] == 0.0 && index > 0 {
             index -= 1;
         }

@@ -98,12 +98,13 @@ impl LightTable {
             if !in_front(p, y.position, y.normal) {
                 return None;
             }
-            let pdf = solid_angle_pdf(pick.pmf * emitter.pdf_area(), p, y.position, y.normal);
-            let d = y.position - p;
-            let dist = d.length();
-            if !(pdf > 0.0 && pdf.is_finite()) {
+            let pdf_area = (pick.pmf * emitter.pdf_area()) as f32;
+            let pdf = solid_angle_pdf(pdf_area, p, y.position, y.normal);
+            if pdf <= 0.0 {
                 return None;
             }
+            let d = y.position - p;
+            let dist = d.length();
             return Some(LightSample {
                 wo: d / dist,
                 dist,
@@ -160,12 +161,8 @@ impl LightTable {
         if !in_front(p, y, emitter.normal(triangle)) {
             return 0.0;
         }
-        solid_angle_pdf(
-            self.select_pmf(index as usize) * emitter.pdf_area(),
-            p,
-            y,
-            n,
-        )
+        let pdf_area = (self.select_pmf(index as usize) * emitter.pdf_area()) as f32;
+        solid_angle_pdf(pdf_area, p, y, n)
     }
 
     /// Solid-angle pdf (selection included) of sampling background direction `dir`.

@@ -145,7 +145,7 @@ pub fn trace_samples(
             let mut counters = TraceCounters::default();
             let mut rec = PathRecord::default();
             let width = scene.camera().width;
-            let keys = PixelKeys::new(opts.seed, s.pixel.y * width + s.pixel.x);
+            let keys = PixelKeys::new(opts.seed, s.pixel.y * width + s.pixel.x, opts.spp);
             trace_pixel_sample(
                 scene,
                 &film_rays,
@@ -275,7 +275,7 @@ fn render_tile_body(
     for y in tile.y * TILE..((tile.y + 1) * TILE).min(h) {
         for x in tile.x * TILE..((tile.x + 1) * TILE).min(w) {
             let pixel = UVec2::new(x, y);
-            let keys = PixelKeys::new(opts.seed, y * w + x);
+            let keys = PixelKeys::new(opts.seed, y * w + x, opts.spp);
             let mut sum = Vec3::ZERO;
             for s in 0..opts.spp {
                 let l = match level {
@@ -331,7 +331,7 @@ fn trace_pixel_sample(
     counters: &mut TraceCounters,
     boxes: impl BoxTest,
 ) -> Vec3 {
-    let mut sampler = keys.sampler(sample, opts.spp);
+    let mut sampler = keys.sampler(sample);
     let film = pixel.as_vec2() + sampler.next_2d();
     let ray = film_rays.ray(film);
     let mut rec = record.map(|(level, rec)| {
