@@ -11,7 +11,9 @@
 //!    searched only inside the truncated plan's block support, plus one
 //!    perfect matching (grid order) so the graph always has one.
 //! 3. **Sparse solve**: an ε-scaling auction from prices `−g` finds near-optimal
-//!    potentials (`auction`), then shortest augmenting paths make the
+//!    potentials (`auction`; a phase that runs out of its bid budget keeps the
+//!    prices it reached, counted in `SolveStats::auction_budget_stops`), then
+//!    shortest augmenting paths make the
 //!    matching exactly complementary-slack with them (`sparse`). Whenever
 //!    more than 1/16 of the rows are unmatched (after step 4 added violated
 //!    pairs), the auction first re-prices all rows from the current potentials.
@@ -224,7 +226,8 @@ pub(crate) fn sparse_prices(
     }
     phases.add("candidates", candidates_start.elapsed().as_secs_f64());
     // Price discovery by auction, then an exact shortest-augmenting-path finish.
-    let v = phases.time("auction", || auction_potentials(&edges, g, settings));
+    let (v, finished) = phases.time("auction", || auction_potentials(&edges, g, settings));
+    stats.auction_budget_stops += usize::from(!finished);
     stats.phases = phases;
     Prices { edges, v, stats }
 }
@@ -254,7 +257,8 @@ pub(crate) fn solve_sorted(
             // (Not on the first round: its prices come fresh from an auction, and
             // the rows its greedy start leaves free are each a short search.)
             let (edges, v) = lsap.into_parts();
-            let v = phases.time("auction", || auction_potentials(&edges, v, settings));
+            let (v, finished) = phases.time("auction", || auction_potentials(&edges, v, settings));
+            stats.auction_budget_stops += usize::from(!finished);
             lsap = SparseAssignment::new(edges, v);
         }
         let augment_start = Instant::now();
@@ -308,25 +312,27 @@ pub(crate) fn solve_sorted(
     }
 }
 
-/// Column potentials from an ε-scaling auction on `edges` started at prices `−v`.
+/// Column potentials from an ε-scaling auction on `edges` started at prices `−v`,
+/// and whether the auction finished.
 ///
 /// If a phase runs out of bids the prices reached so far are returned: they
 /// only rose from `−v` and are ε-complementary for every row assigned at
-/// that point, and the exact finish accepts any potentials.
+/// that point, and the exact finish accepts any potentials. The caller counts
+/// the stop in `SolveStats::auction_budget_stops`.
 fn auction_potentials(
     edges: &[Vec<(u32, f64)>],
     v: Vec<f64>,
     settings: &ExactSettings,
-) -> Vec<f64> {
+) -> (Vec<f64>, bool) {
     let mut q: Vec<f64> = v.iter().map(|&t| -t).collect();
-    auction::run(
+    let finished = auction::run(
         edges,
         &mut q,
         settings.auction_start,
         settings.auction_end,
         0.2,
     );
-    q.iter().map(|&t| -t).collect()
+    (q.iter().map(|&t| -t).collect(), finished)
 }
 
 /// Each check adds this many times `candidates` worst violators per row (fewer, costlier rounds otherwise).

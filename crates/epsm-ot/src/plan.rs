@@ -86,6 +86,8 @@ pub struct SolveStats {
     pub candidate_pairs: usize,
     /// Pairs added because the optimality check found them violated (exact solver).
     pub added_pairs: usize,
+    /// Auctions stopped by their bid budget, whose prices were used as reached (exact solver).
+    pub auction_budget_stops: usize,
     /// L1 marginal error of the plan (entropic solver).
     pub marginal_error: Option<f64>,
     /// Coarse corrections whose cluster scaling did not converge, applied clamped

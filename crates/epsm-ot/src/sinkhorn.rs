@@ -287,9 +287,8 @@ pub fn solve(
         let yy = solve_one(&y, &y, diameter_sq(target, target), settings);
         stats.iterations += xx.dual.iterations + yy.dual.iterations;
         stats.pair_evaluations += xx.pairs + yy.pairs;
-        for guards in [xx.dual.guards, yy.dual.guards] {
-            stats.clamped_corrections += guards.clamped_corrections;
-        }
+        stats.clamped_corrections +=
+            xx.dual.guards.clamped_corrections + yy.dual.guards.clamped_corrections;
         phases.merge(&xx.dual.phases);
         phases.merge(&yy.dual.phases);
         let self_bary = x.unsort(&xx.barycentres);

@@ -17,6 +17,7 @@
 //! | `pair_evaluations` | kernel or cost evaluations                                  |
 //! | `pair_evals_per_s` | `pair_evaluations / seconds` (sinkhorn), else null          |
 //! | `clamped_corrections` | coarse corrections whose cluster scaling did not converge, applied clamped before the scale's support was rebuilt (sinkhorn) |
+//! | `auction_budget_stops` | auctions stopped by their bid budget, prices used as reached (exact) |
 //! | `peak_rss_mb`      | peak resident memory of the process (VmHWM)                 |
 //! | `threads`          | rayon threads                                               |
 //! | `phases`           | seconds per named phase of the solve (see below)            |
@@ -86,6 +87,7 @@ struct Report {
     pair_evaluations: u64,
     pair_evals_per_s: Option<f64>,
     clamped_corrections: usize,
+    auction_budget_stops: usize,
     peak_rss_mb: Option<f64>,
     threads: usize,
     phases: BTreeMap<&'static str, f64>,
@@ -128,6 +130,7 @@ pub fn run(args: &OtBenchArgs) -> anyhow::Result<()> {
         pair_evaluations: pairs,
         pair_evals_per_s: (args.solver == OtSolver::Sinkhorn).then(|| pairs as f64 / seconds),
         clamped_corrections: result.stats.clamped_corrections,
+        auction_budget_stops: result.stats.auction_budget_stops,
         peak_rss_mb: super::peak_rss_mb(),
         threads: rayon::current_num_threads(),
         phases: result.stats.phases.iter().collect(),

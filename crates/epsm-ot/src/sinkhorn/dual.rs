@@ -132,34 +132,33 @@ impl Loop<'_> {
         // Support and per-point cut keep reduced costs up to `threshold`.
         let threshold = settings.truncation * eps;
         let mut sup = self.support(f, g, threshold);
-        let g_half =
-            |sup: &Support, threshold: f64, f: &mut [f64], g: &mut [f64], correct: bool| {
-                let cut = Some(Cut { own: g, threshold });
-                if correct {
-                    // The target update also gives the block masses; correct before the next source update.
-                    let next = |j: usize, t: f64| g[j] + omega * (t - g[j]);
-                    let pass = softmin_blocks(fy, fx, &sup.cols, f, eps, next, cut);
-                    relax(g, &pass.softmin, omega);
-                    let outcome = coarse::correct(
-                        fy,
-                        fx,
-                        &sup.cols,
-                        &pass.log_masses,
-                        g,
-                        f,
-                        eps,
-                        settings.truncation,
-                    );
-                    (pass.pairs, Some(outcome))
-                } else {
-                    let (gt, pairs) = softmin(fy, fx, &sup.cols, f, eps, cut);
-                    relax(g, &gt, omega);
-                    (pairs, None)
-                }
-            };
+        let g_half = |sup: &Support, f: &mut [f64], g: &mut [f64], correct: bool| {
+            let cut = Some(Cut { own: g, threshold });
+            if correct {
+                // The target update also gives the block masses; correct before the next source update.
+                let next = |j: usize, t: f64| g[j] + omega * (t - g[j]);
+                let pass = softmin_blocks(fy, fx, &sup.cols, f, eps, next, cut);
+                relax(g, &pass.softmin, omega);
+                let outcome = coarse::correct(
+                    fy,
+                    fx,
+                    &sup.cols,
+                    &pass.log_masses,
+                    g,
+                    f,
+                    eps,
+                    settings.truncation,
+                );
+                (pass.pairs, Some(outcome))
+            } else {
+                let (gt, pairs) = softmin(fy, fx, &sup.cols, f, eps, cut);
+                relax(g, &gt, omega);
+                (pairs, None)
+            }
+        };
         // ε changed: the scale opens with a target update, corrected (the previous scale
         // ended on a source update).
-        let (pairs, mut outcome) = g_half(&sup, threshold, f, g, period > 0);
+        let (pairs, mut outcome) = g_half(&sup, f, g, period > 0);
         self.pairs += pairs;
         for it in 1..=settings.max_scale_iterations {
             if outcome == Some(coarse::Correction::Clamped) {
@@ -177,7 +176,7 @@ impl Loop<'_> {
             if err <= tolerance || it == settings.max_scale_iterations {
                 break;
             }
-            let (pairs, next) = g_half(&sup, threshold, f, g, period > 0 && it % period == 0);
+            let (pairs, next) = g_half(&sup, f, g, period > 0 && it % period == 0);
             self.pairs += pairs;
             outcome = next;
         }
