@@ -454,7 +454,7 @@ fn solve_spd(mut a: [[f64; DIM]; DIM], mut b: [f64; DIM]) -> [f64; DIM] {
 }
 
 /// Lower bound on `c_ij − f_i − g_j` over all `i ∈ I`, `j ∈ J` (see the module doc).
-fn pair_bound(ci: &Cluster, fi: &PotentialFit, cj: &Cluster, gj: &PotentialFit) -> f64 {
+pub(crate) fn pair_bound(ci: &Cluster, fi: &PotentialFit, cj: &Cluster, gj: &PotentialFit) -> f64 {
     let delta: [f64; DIM] = std::array::from_fn(|d| ci.centroid[d] - cj.centroid[d]);
     let norm = |v: [f64; DIM]| v.iter().map(|t| t * t).sum::<f64>().sqrt();
     let dist_sq: f64 = delta.iter().map(|t| t * t).sum();

@@ -49,6 +49,7 @@
 
 mod blocks;
 pub mod cost;
+mod disjoint_sets;
 pub mod error;
 pub mod exact;
 mod kernel;

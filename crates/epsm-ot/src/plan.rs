@@ -90,8 +90,12 @@ pub struct SolveStats {
     pub auction_budget_stops: usize,
     /// L1 marginal error of the plan (entropic solver).
     pub marginal_error: Option<f64>,
-    /// Coarse corrections whose cluster scaling did not converge, applied clamped
+    /// Coarse corrections whose cluster scaling converged only once lumped per
+    /// connected component of the support with bridges between the components,
     /// before the scale's support was rebuilt (entropic solver).
+    pub bridged_corrections: usize,
+    /// Coarse corrections whose cluster scaling did not converge even lumped,
+    /// applied clamped before the scale's support was rebuilt (entropic solver).
     pub clamped_corrections: usize,
     /// Wall-clock seconds of the named phases of the solve, in the order they first ran.
     pub phases: PhaseTimes,

@@ -279,6 +279,7 @@ pub fn solve(
         iterations: xy.dual.iterations,
         pair_evaluations: xy.pairs,
         marginal_error: Some(xy.dual.marginal_error),
+        bridged_corrections: xy.dual.guards.bridged_corrections,
         clamped_corrections: xy.dual.guards.clamped_corrections,
         ..SolveStats::default()
     };
@@ -287,6 +288,8 @@ pub fn solve(
         let yy = solve_one(&y, &y, diameter_sq(target, target), settings);
         stats.iterations += xx.dual.iterations + yy.dual.iterations;
         stats.pair_evaluations += xx.pairs + yy.pairs;
+        stats.bridged_corrections +=
+            xx.dual.guards.bridged_corrections + yy.dual.guards.bridged_corrections;
         stats.clamped_corrections +=
             xx.dual.guards.clamped_corrections + yy.dual.guards.clamped_corrections;
         phases.merge(&xx.dual.phases);

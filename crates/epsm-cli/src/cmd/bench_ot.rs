@@ -16,7 +16,8 @@
 //! | `iterations`       | Sinkhorn updates / exact re-solve rounds / projections      |
 //! | `pair_evaluations` | kernel or cost evaluations                                  |
 //! | `pair_evals_per_s` | `pair_evaluations / seconds` (sinkhorn), else null          |
-//! | `clamped_corrections` | coarse corrections whose cluster scaling did not converge, applied clamped before the scale's support was rebuilt (sinkhorn) |
+//! | `bridged_corrections` | coarse corrections whose cluster scaling converged only lumped per component of the support, with bridges between components, before the scale's support was rebuilt (sinkhorn) |
+//! | `clamped_corrections` | coarse corrections whose cluster scaling did not converge even lumped, applied clamped before the scale's support was rebuilt (sinkhorn) |
 //! | `auction_budget_stops` | auctions stopped by their bid budget, prices used as reached (exact) |
 //! | `peak_rss_mb`      | peak resident memory of the process (VmHWM)                 |
 //! | `threads`          | rayon threads                                               |
@@ -86,6 +87,7 @@ struct Report {
     iterations: usize,
     pair_evaluations: u64,
     pair_evals_per_s: Option<f64>,
+    bridged_corrections: usize,
     clamped_corrections: usize,
     auction_budget_stops: usize,
     peak_rss_mb: Option<f64>,
@@ -129,6 +131,7 @@ pub fn run(args: &OtBenchArgs) -> anyhow::Result<()> {
         iterations: result.stats.iterations,
         pair_evaluations: pairs,
         pair_evals_per_s: (args.solver == OtSolver::Sinkhorn).then(|| pairs as f64 / seconds),
+        bridged_corrections: result.stats.bridged_corrections,
         clamped_corrections: result.stats.clamped_corrections,
         auction_budget_stops: result.stats.auction_budget_stops,
         peak_rss_mb: super::peak_rss_mb(),

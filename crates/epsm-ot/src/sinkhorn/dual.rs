@@ -60,8 +60,11 @@ pub(crate) struct Dual {
 /// Counts of the fine phase's safeguards.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub(crate) struct Guards {
-    /// Coarse corrections whose cluster scaling did not converge, applied clamped
-    /// (each followed by a rebuild of the scale's support; see `coarse`).
+    /// Coarse corrections whose cluster scaling converged only with bridges between
+    /// the support's components (each followed by a rebuild of the scale's support; see `coarse`).
+    pub bridged_corrections: usize,
+    /// Coarse corrections whose cluster scaling did not converge even with bridges,
+    /// applied clamped (each followed by a rebuild of the scale's support).
     pub clamped_corrections: usize,
 }
 
@@ -161,11 +164,18 @@ impl Loop<'_> {
         let (pairs, mut outcome) = g_half(&sup, f, g, period > 0);
         self.pairs += pairs;
         for it in 1..=settings.max_scale_iterations {
-            if outcome == Some(coarse::Correction::Clamped) {
-                // The support could not carry the cluster marginals; the clamped shift moved
-                // the clusters that lacked mass towards the pairs outside it: rebuild it from
-                // the shifted potentials.
-                self.guards.clamped_corrections += 1;
+            let count = match outcome {
+                Some(coarse::Correction::Bridged { .. }) => {
+                    Some(&mut self.guards.bridged_corrections)
+                }
+                Some(coarse::Correction::Clamped) => Some(&mut self.guards.clamped_corrections),
+                _ => None,
+            };
+            if let Some(count) = count {
+                // The support could not carry the cluster marginals; the shift moved the
+                // clusters that lacked mass towards pairs outside it: rebuild it from the
+                // shifted potentials.
+                *count += 1;
                 sup = self.support(f, g, threshold);
             }
             let (ft, pairs) = softmin(fx, fy, &sup.rows, g, eps, Some(Cut { own: f, threshold }));

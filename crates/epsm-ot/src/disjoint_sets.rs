@@ -1,0 +1,81 @@
+//! Disjoint sets (union–find) over `0..n`, for the connected components of block graphs.
+
+/// A partition of `0..n` into sets, merged by [`DisjointSets::union`].
+///
+/// Union by size and path halving; written here because the two uses (the
+/// components of a support graph and a minimum spanning tree over them, in
+/// `sinkhorn::coarse`) need a dozen lines, not a graph library.
+#[derive(Debug, Clone)]
+pub(crate) struct DisjointSets {
+    parent: Vec<usize>,
+    size: Vec<usize>,
+}
+
+impl DisjointSets {
+    /// `n` singleton sets.
+    pub fn new(n: usize) -> Self {
+        Self {
+            parent: (0..n).collect(),
+            size: vec![1; n],
+        }
+    }
+
+    /// The representative of `i`'s set.
+    pub fn find(&mut self, mut i: usize) -> usize {
+        while self.parent[i] != i {
+            self.parent[i] = self.parent[self.parent[i]];
+            i = self.parent[i];
+        }
+        i
+    }
+
+    /// Merges the sets of `a` and `b`; `false` if they were already one set.
+    pub fn union(&mut self, a: usize, b: usize) -> bool {
+        let (mut a, mut b) = (self.find(a), self.find(b));
+        if a == b {
+            return false;
+        }
+        if self.size[a] < self.size[b] {
+            std::mem::swap(&mut a, &mut b);
+        }
+        self.parent[b] = a;
+        self.size[a] += self.size[b];
+        true
+    }
+
+    /// Dense labels `0..k` of the sets, in order of their smallest element, and `k`.
+    pub fn labels(&mut self) -> (Vec<usize>, usize) {
+        let n = self.parent.len();
+        let mut label_of_root = vec![usize::MAX; n];
+        let mut count = 0;
+        let labels = (0..n)
+            .map(|i| {
+                let r = self.find(i);
+                if label_of_root[r] == usize::MAX {
+                    label_of_root[r] = count;
+                    count += 1;
+                }
+                label_of_root[r]
+            })
+            .collect();
+        (labels, count)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn unions_give_the_connected_components() {
+        // Edges 0–3, 3–5, 1–4 over 0..7: components {0,3,5}, {1,4}, {2}, {6}.
+        let mut sets = DisjointSets::new(7);
+        assert!(sets.union(0, 3));
+        assert!(sets.union(5, 3));
+        assert!(sets.union(1, 4));
+        assert!(!sets.union(0, 5), "0 and 5 were already joined");
+        let (labels, count) = sets.labels();
+        assert_eq!(count, 4);
+        assert_eq!(labels, vec![0, 1, 2, 0, 1, 0, 3]);
+    }
+}
