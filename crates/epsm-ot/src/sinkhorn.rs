@@ -41,6 +41,7 @@
 //! ```
 
 mod anderson;
+mod bridges;
 mod coarse;
 mod dual;
 mod pass;

@@ -25,17 +25,18 @@
 //! weak ones (plan mass below `e^−24` of a cluster's; the others carry more
 //! than `e^−5`). Mass then has to cross a bottleneck, and the scaling's
 //! potentials drift apart per component without converging. Two fallbacks:
-//! 1. **Bridged**: the problem is lumped per component of the graph of strong
-//!    links (mass at least `e^−WEAK_LINK` of the smaller cluster's), with
-//!    bridges across components: block pairs outside the support, each with
-//!    the upper bound `A_I B_J e^{−b_IJ/ε}` on its mass from the block bound
-//!    `b_IJ` on reduced costs (see `blocks`), up to `BRIDGE_MARGIN · ε` above
-//!    the bottleneck bound that connects all components. The small dense
-//!    component scaling gives one shift per component; applied, it moves the
+//! 1. **Bridged** (`bridges`): the problem is lumped per component of the
+//!    graph of strong links (mass at least `e^−WEAK_LINK` of the smaller
+//!    cluster's), with bridges across components: block pairs outside the
+//!    support, each with the upper bound `A_I B_J e^{−b_IJ/ε}` on its mass from
+//!    the block bound `b_IJ` on reduced costs (see `blocks`), up to
+//!    `BRIDGE_MARGIN · ε` above the bottleneck bound that connects all
+//!    components. Newton's method on the small lumped problem gives one shift
+//!    per component (1–8 steps on the benchmark pairs); applied, it moves the
 //!    components' relative potentials so the bridges carry the imbalance.
 //!    Since a bridge's mass is over-estimated, the shift errs short of the
 //!    exact one, never past it.
-//! 2. **Clamped**, if the component scaling does not converge either: the
+//! 2. **Clamped**, if Newton's method does not converge either: the
 //!    cluster scaling's last iterate, with the gauge `u + c, v − c` fixed by a
 //!    zero mean of `u` and each entry clamped to `±clamp` (the caller passes
 //!    the support's width in units of ε), is applied anyway: that moves the
@@ -44,7 +45,9 @@
 //! Either way the caller rebuilds the support from the shifted potentials. (On
 //! seed 1 of the benchmark pair at n = 16384, clamped corrections alone needed
 //! seven rebuilds in a row, the shift overshooting by ±30ε each time, 3.0 G
-//! pairs; one bridged correction: 2.2 G pairs.)
+//! pairs; one bridged correction: 2.2 G pairs. Seed 4's components are joined
+//! by one block pair of mass `e^−73` of a cluster's: 1.91 G pairs with one
+//! clamped correction, 1.66 G bridged.)
 //!
 //! Everything runs in a fixed order (the pass over fixed source blocks, the
 //! cluster scaling sequentially), so results do not depend on the thread count.
@@ -52,9 +55,8 @@
 use rayon::prelude::*;
 
 use super::anderson::{Anderson, Guarded};
+use super::bridges::Lumped;
 use super::pass::{Level, LogSum};
-use crate::blocks::{fit_potentials, pair_bound};
-use crate::disjoint_sets::DisjointSets;
 
 /// L1 error of the cluster marginals at which the cluster scaling stops.
 pub(super) const SCALING_TOLERANCE: f64 = 1e-4;
@@ -70,9 +72,10 @@ const SCALING_MEMORY: usize = 8;
 /// [`Support`](crate::blocks::Support) keeps them. The roles of the two
 /// measures are symmetric: a pass over target blocks corrects with `x, f` the
 /// targets. If the cluster scaling does not converge, the problem is lumped per
-/// component of the support graph with bridges between components ([`Bridged`],
-/// see the module doc); if that does not converge either, the cluster scaling's
-/// last iterate is applied with every entry clamped to `±clamp` (units of ε).
+/// component of the support graph with bridges between components ([`Lumped`],
+/// see the module doc); if Newton's method does not solve that either, the
+/// cluster scaling's last iterate is applied with every entry clamped to
+/// `±clamp` (units of ε).
 #[allow(clippy::too_many_arguments)]
 pub(super) fn correct(
     x: &Level,
@@ -90,28 +93,18 @@ pub(super) fn correct(
         updates: scaling.updates,
     };
     if !scaling.converged
-        && let Some(bridged) = Bridged::new(x, y, lists, log_masses, f, g, eps, (&log_a, &log_b))
+        && let Some(lumped) = Lumped::new(x, y, lists, log_masses, f, g, eps, (&log_a, &log_b))
+        && let Some(solved) = lumped.solve()
     {
-        let k = bridged.components;
-        let dense: Vec<Vec<u32>> = vec![(0..k as u32).collect(); k];
-        let most = (COMPONENT_WORK / (k * k)).clamp(SCALING_ITERATIONS, 20 * SCALING_ITERATIONS);
-        let whole = scale(
-            &bridged.log_flows,
-            &dense,
-            &bridged.log_a,
-            &bridged.log_b,
-            most,
-        );
-        if whole.converged {
-            outcome = Correction::Bridged {
-                updates: whole.updates,
-            };
-            scaling = Scaling {
-                u: bridged.src.iter().map(|&c| whole.u[c]).collect(),
-                v: bridged.dst.iter().map(|&c| whole.v[c]).collect(),
-                ..whole
-            };
-        }
+        outcome = Correction::Bridged {
+            updates: solved.steps,
+        };
+        scaling = Scaling {
+            u: solved.u,
+            v: solved.v,
+            updates: solved.steps,
+            converged: true,
+        };
     }
     let (u, v) = if scaling.converged {
         (scaling.u, scaling.v)
@@ -122,156 +115,6 @@ pub(super) fn correct(
     shift(f, &x.ranges, &u, eps);
     shift(g, &y.ranges, &v, eps);
     outcome
-}
-
-/// A block pair links two clusters strongly if its plan mass is at least `exp(−WEAK_LINK)` times
-/// the smaller cluster's mass (on the benchmark pairs, links are either above `e^−5` or below
-/// `e^−24`; the cluster scaling cannot move mass through the weak ones within its updates).
-const WEAK_LINK: f64 = 10.0;
-
-/// Most entry updates (components², per update) of the lumped component scaling; its updates are
-/// capped at `COMPONENT_WORK / components²`, between 1 and 20 times [`SCALING_ITERATIONS`].
-const COMPONENT_WORK: usize = 40_000_000;
-
-/// Bridges, in units of ε, are kept up to this far above the bottleneck bound (see [`Bridged`]),
-/// so that several block pairs share the imbalance and no single loose bound sets the shift.
-const BRIDGE_MARGIN: f64 = 10.0;
-
-/// The cluster problem lumped per connected component of the support graph, with bridges.
-///
-/// The graph joins source cluster `I` and target cluster `J` where the plan's mass on
-/// `(I, J)` is not zero. A bridge is a block pair `(I, J)` across components with the upper
-/// bound `A_I B_J exp(−b_IJ/ε)` on its mass, where `b_IJ` is the block bound on reduced costs
-/// (`blocks::pair_bound` for the fits of `f, g`) and `A_I, B_J` the cluster masses. Kept are
-/// the pairs with `b_IJ ≤ b* + BRIDGE_MARGIN · ε`, where `b*` is the bottleneck of a
-/// minimum spanning tree over the components (edge weight: the cheapest bound between two
-/// components), so the bridges connect every component.
-struct Bridged {
-    components: usize,
-    /// Component of each source / target cluster.
-    src: Vec<usize>,
-    dst: Vec<usize>,
-    /// `log` of the plan's mass between two components (bridges included), `[a][b]`.
-    log_flows: Vec<Vec<f64>>,
-    /// `log` of each component's source / target mass.
-    log_a: Vec<f64>,
-    log_b: Vec<f64>,
-}
-
-impl Bridged {
-    /// `None` if the support graph is connected, no bridges join it, or the levels are not clusterings.
-    #[allow(clippy::too_many_arguments)]
-    fn new(
-        x: &Level,
-        y: &Level,
-        lists: &[Vec<u32>],
-        log_masses: &[Vec<f64>],
-        f: &[f64],
-        g: &[f64],
-        eps: f64,
-        (log_a, log_b): (&[f64], &[f64]),
-    ) -> Option<Self> {
-        let (cx, cy) = (x.clustered?, y.clustered?);
-        let (na, nb) = (log_a.len(), log_b.len());
-        let mut sets = DisjointSets::new(na + nb);
-        for (i, (list, row)) in lists.iter().zip(log_masses).enumerate() {
-            for (&j, &lk) in list.iter().zip(row) {
-                if lk >= log_a[i].min(log_b[j as usize]) - WEAK_LINK {
-                    sets.union(i, na + j as usize);
-                }
-            }
-        }
-        let (labels, components) = sets.labels();
-        if components < 2 {
-            return None;
-        }
-        let (src, dst) = labels.split_at(na);
-        let (fit_f, fit_g) = (fit_potentials(cx, f), fit_potentials(cy, g));
-        let bound =
-            |i: usize, j: usize| pair_bound(&cx.clusters[i], &fit_f[i], &cy.clusters[j], &fit_g[j]);
-        // The cheapest bound from each source cluster into each other component.
-        let cheapest: Vec<Vec<f64>> = (0..na)
-            .into_par_iter()
-            .map(|i| {
-                let mut best = vec![f64::INFINITY; components];
-                for (j, &c) in dst.iter().enumerate() {
-                    if c != src[i] {
-                        best[c] = best[c].min(bound(i, j));
-                    }
-                }
-                best
-            })
-            .collect();
-        let mut edges: Vec<(f64, usize, usize)> = cheapest
-            .iter()
-            .zip(src)
-            .flat_map(|(best, &a)| {
-                best.iter()
-                    .enumerate()
-                    .filter(|(_, b)| b.is_finite())
-                    .map(move |(c, &b)| (b, a, c))
-            })
-            .collect();
-        edges.sort_by(|p, q| p.0.total_cmp(&q.0));
-        let mut joined = DisjointSets::new(components);
-        let mut merges = 0;
-        let mut bottleneck = f64::NEG_INFINITY;
-        for (b, a, c) in edges {
-            if joined.union(a, c) {
-                bottleneck = b;
-                merges += 1;
-            }
-        }
-        if merges + 1 < components {
-            return None;
-        }
-        let limit = bottleneck + BRIDGE_MARGIN * eps;
-        // Per source cluster, its mass into each component: support entries and bridges.
-        let rows: Vec<Vec<LogSum>> = (0..na)
-            .into_par_iter()
-            .map(|i| {
-                let mut sums = vec![LogSum::default(); components];
-                for (&j, &lk) in lists[i].iter().zip(&log_masses[i]) {
-                    sums[dst[j as usize]].push(lk);
-                }
-                let kept = |j: usize| lists[i].binary_search(&(j as u32)).is_ok();
-                for (j, &c) in dst.iter().enumerate() {
-                    if c != src[i] && !kept(j) {
-                        let b = bound(i, j);
-                        if b <= limit {
-                            sums[c].push(log_a[i] + log_b[j] - b / eps);
-                        }
-                    }
-                }
-                sums
-            })
-            .collect();
-        let mut flows = vec![vec![LogSum::default(); components]; components];
-        for (sums, &a) in rows.iter().zip(src) {
-            for (flow, sum) in flows[a].iter_mut().zip(sums) {
-                flow.push(sum.value());
-            }
-        }
-        let lumped = |labels: &[usize], log_m: &[f64]| {
-            let mut sums = vec![LogSum::default(); components];
-            labels
-                .iter()
-                .zip(log_m)
-                .for_each(|(&c, &m)| sums[c].push(m));
-            sums.iter().map(LogSum::value).collect()
-        };
-        Some(Self {
-            components,
-            log_a: lumped(src, log_a),
-            log_b: lumped(dst, log_b),
-            log_flows: flows
-                .iter()
-                .map(|row| row.iter().map(LogSum::value).collect())
-                .collect(),
-            src: src.to_vec(),
-            dst: dst.to_vec(),
-        })
-    }
 }
 
 /// A scaling's `u, v` in the gauge where `u` has zero mean, each entry clamped to
@@ -292,15 +135,15 @@ fn bounded(scaling: Scaling, clamp: f64) -> (Vec<f64>, Vec<f64>) {
 pub(super) enum Correction {
     /// The cluster marginals are exact; the cluster scaling took `updates` updates.
     Applied { updates: usize },
-    /// The support's cluster scaling did not converge; with bridges between its
-    /// components it did, in `updates` updates.
+    /// The support's cluster scaling did not converge; lumped per component with
+    /// bridges between components it did, in `updates` Newton steps.
     Bridged { updates: usize },
     /// The cluster scaling did not converge; its last iterate was applied clamped.
     Clamped,
 }
 
 /// `log Σ_{i∈I} w_i` per cluster.
-fn cluster_log_masses(level: &Level) -> Vec<f64> {
+pub(super) fn cluster_log_masses(level: &Level) -> Vec<f64> {
     level
         .ranges
         .iter()
