@@ -170,7 +170,7 @@ impl PixelSampler<'_> {
     }
 
     /// The next two numbers in `[0, 1)²`.
-    #[inline(always)]
+    #[inline]
     pub fn next_2d(&mut self) -> Vec2 {
         let x = self.next_1d();
         Vec2::new(x, self.next_1d())

@@ -16,16 +16,14 @@ use std::time::Instant;
 use glam::{UVec2, Vec3};
 use rayon::prelude::*;
 
-mod batch;
-mod loops;
 mod path;
 
-use batch::Batch;
-#[cfg(target_arch = "x86_64")]
-use loops::Avx2;
-use loops::RayLoops;
+use path::{Recording, trace_path};
 
-use crate::bvh::Portable;
+#[cfg(target_arch = "x86_64")]
+use crate::bvh::Avx;
+use crate::bvh::{BoxTest, Portable};
+use crate::camera::FilmRays;
 use crate::film::Image;
 use crate::record::{PathRecord, RecordLevel};
 use crate::sampler::PixelKeys;
@@ -34,8 +32,6 @@ use crate::scene::Scene;
 /// Side of the square tiles rendered by one task.
 pub const TILE: u32 = 16;
 const DIMS_PER_BOUNCE: u32 = 8;
-/// Pixel samples per batch of [`trace_samples`].
-const SAMPLES_BATCH: usize = 64;
 /// Shadow rays stop this fraction short of the light point (relative, so it
 /// works at any scene scale).
 const SHADOW_EPS: f32 = 1e-4;
@@ -143,27 +139,25 @@ pub fn trace_samples(
     level: RecordLevel,
 ) -> Vec<PathRecord> {
     let film_rays = scene.camera().film_rays();
-    let width = scene.camera().width;
     samples
-        .par_chunks(SAMPLES_BATCH)
-        .flat_map_iter(|chunk| {
-            let keys: Vec<PixelKeys> = chunk
-                .iter()
-                .map(|s| PixelKeys::new(opts.seed, s.pixel.y * width + s.pixel.x, opts.spp))
-                .collect();
-            let mut records = vec![PathRecord::default(); chunk.len()];
-            let mut radiance = vec![Vec3::ZERO; chunk.len()];
-            Batch::default().trace(
+        .par_iter()
+        .map(|s| {
+            let mut counters = TraceCounters::default();
+            let mut rec = PathRecord::default();
+            let width = scene.camera().width;
+            let keys = PixelKeys::new(opts.seed, s.pixel.y * width + s.pixel.x, opts.spp);
+            trace_pixel_sample(
                 scene,
-                opts,
                 &film_rays,
-                keys.iter().zip(chunk).map(|(k, s)| (k, s.pixel, s.sample)),
-                Some((level, &mut records)),
-                &mut radiance,
-                &mut TraceCounters::default(),
+                opts,
+                &keys,
+                s.pixel,
+                s.sample,
+                Some((level, &mut rec)),
+                &mut counters,
                 Portable,
             );
-            records
+            rec
         })
         .collect()
 }
@@ -227,19 +221,24 @@ fn render_tile(
     tile: UVec2,
 ) -> TileOutput {
     #[cfg(target_arch = "x86_64")]
-    if let Some(avx2) = Avx2::detect() {
+    if let Some(avx) = Avx::detect()
+        && std::arch::is_x86_feature_detected!("avx2")
+        && std::arch::is_x86_feature_detected!("bmi1")
+        && std::arch::is_x86_feature_detected!("bmi2")
+        && std::arch::is_x86_feature_detected!("lzcnt")
+        && std::arch::is_x86_feature_detected!("popcnt")
+    {
         // SAFETY: `render_tile_avx2` only requires the CPU features it
-        // enables, and an `Avx2` exists only on a CPU found to have each of
-        // them (AVX2 implies the AVX and SSE levels below it).
-        return unsafe { render_tile_avx2(scene, opts, level, tile, avx2) };
+        // enables, and the CPU was just found to have each of them (AVX2
+        // implies the AVX and SSE levels below it).
+        return unsafe { render_tile_avx2(scene, opts, level, tile, avx) };
     }
     render_tile_body(scene, opts, level, tile, Portable)
 }
 
 /// [`render_tile_body`] compiled for AVX2 and the bit-manipulation
 /// extensions every AVX2 CPU has: the tracer's hot functions are
-/// `#[inline(always)]`, so they are compiled here (and the ray loops in
-/// their own functions, module `loops`) with VEX-encoded vector
+/// `#[inline(always)]`, so they are compiled here with VEX-encoded vector
 /// instructions (three-operand forms, fewer register copies) and single
 /// instructions for the traversal's bit scans and counts (about 10 % fewer
 /// instructions per sample on `scenes/caustic-box.toml`). No fused
@@ -252,76 +251,119 @@ fn render_tile_avx2(
     opts: &RenderOptions,
     level: Option<RecordLevel>,
     tile: UVec2,
-    avx2: Avx2,
+    avx: Avx,
 ) -> TileOutput {
-    render_tile_body(scene, opts, level, tile, avx2)
+    render_tile_body(scene, opts, level, tile, avx)
 }
 
-/// Renders one tile, rays by `loops`: one batch of the tile's pixels
-/// per sample index, so each pixel sums its samples in order.
+/// Renders one tile, box tests by `boxes`.
 #[inline(always)]
 fn render_tile_body(
     scene: &Scene,
     opts: &RenderOptions,
     level: Option<RecordLevel>,
     tile: UVec2,
-    loops: impl RayLoops,
+    boxes: impl BoxTest,
 ) -> TileOutput {
     let (w, h) = (scene.camera().width, scene.camera().height);
     let film_rays = scene.camera().film_rays();
-    let pixels: Vec<UVec2> = (tile.y * TILE..((tile.y + 1) * TILE).min(h))
-        .flat_map(|y| (tile.x * TILE..((tile.x + 1) * TILE).min(w)).map(move |x| UVec2::new(x, y)))
-        .collect();
-    let keys: Vec<PixelKeys> = pixels
-        .iter()
-        .map(|p| PixelKeys::new(opts.seed, p.y * w + p.x, opts.spp))
-        .collect();
     let mut out = TileOutput {
         pixels: Vec::new(),
         records: Vec::new(),
         counters: TraceCounters::default(),
     };
-    let mut sums = vec![Vec3::ZERO; pixels.len()];
-    let mut radiance = vec![Vec3::ZERO; pixels.len()];
-    let mut batch = Batch::default();
-    for s in 0..opts.spp {
-        let starts = keys.iter().zip(&pixels).map(|(k, &p)| (k, p, s));
-        // Two calls, so that the one without records compiles without the
-        // recording branches.
-        match level {
-            None => batch.trace(
-                scene,
-                opts,
-                &film_rays,
-                starts,
-                None,
-                &mut radiance,
-                &mut out.counters,
-                loops,
-            ),
-            Some(level) => {
-                let mut records = vec![PathRecord::default(); pixels.len()];
-                batch.trace(
-                    scene,
-                    opts,
-                    &film_rays,
-                    starts,
-                    Some((level, &mut records)),
-                    &mut radiance,
-                    &mut out.counters,
-                    loops,
-                );
-                out.records.extend(records);
+    for y in tile.y * TILE..((tile.y + 1) * TILE).min(h) {
+        for x in tile.x * TILE..((tile.x + 1) * TILE).min(w) {
+            let pixel = UVec2::new(x, y);
+            let keys = PixelKeys::new(opts.seed, y * w + x, opts.spp);
+            let mut sum = Vec3::ZERO;
+            for s in 0..opts.spp {
+                let l = match level {
+                    Some(level) => {
+                        let mut rec = PathRecord::default();
+                        let l = trace_pixel_sample(
+                            scene,
+                            &film_rays,
+                            opts,
+                            &keys,
+                            pixel,
+                            s,
+                            Some((level, &mut rec)),
+                            &mut out.counters,
+                            boxes,
+                        );
+                        out.records.push(rec);
+                        l
+                    }
+                    None => trace_pixel_sample(
+                        scene,
+                        &film_rays,
+                        opts,
+                        &keys,
+                        pixel,
+                        s,
+                        None,
+                        &mut out.counters,
+                        boxes,
+                    ),
+                };
+                sum += l;
             }
-        }
-        for (sum, l) in sums.iter_mut().zip(&radiance) {
-            *sum += *l;
+            out.pixels.push((pixel, sum / opts.spp as f32));
         }
     }
-    out.pixels = pixels
-        .into_iter()
-        .zip(sums)
-        .map(|(p, sum)| (p, sum / opts.spp as f32))
-        .collect();
     out
+}
+
+/// Traces one pixel sample (primary rays by `film_rays`, the pixel's `keys`,
+/// box tests by `boxes`);
+/// returns its radiance (zero, and counted, when it was not finite).
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn trace_pixel_sample(
+    scene: &Scene,
+    film_rays: &FilmRays,
+    opts: &RenderOptions,
+    keys: &PixelKeys,
+    pixel: UVec2,
+    sample: u32,
+    record: Option<(RecordLevel, &mut PathRecord)>,
+    counters: &mut TraceCounters,
+    boxes: impl BoxTest,
+) -> Vec3 {
+    let mut sampler = keys.sampler(sample);
+    let film = pixel.as_vec2() + sampler.next_2d();
+    let ray = film_rays.ray(film);
+    let mut rec = record.map(|(level, rec)| {
+        *rec = PathRecord {
+            pixel,
+            sample,
+            film,
+            ..PathRecord::default()
+        };
+        Recording {
+            level,
+            rec,
+            done: false,
+        }
+    });
+    let l = trace_path(
+        scene,
+        opts,
+        ray,
+        &mut sampler,
+        rec.as_mut(),
+        counters,
+        boxes,
+    );
+    let l = if l.is_finite() {
+        l
+    } else {
+        counters.non_finite += 1;
+        Vec3::ZERO
+    };
+    if let Some(r) = rec {
+        r.rec.radiance = l;
+    }
+    l
 }
