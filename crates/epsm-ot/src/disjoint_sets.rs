@@ -2,9 +2,9 @@
 
 /// A partition of `0..n` into sets, merged by [`DisjointSets::union`].
 ///
-/// Union by size and path halving; written here because the two uses (the
-/// components of a support graph and a minimum spanning tree over them, in
-/// `sinkhorn::coarse`) need a dozen lines, not a graph library.
+/// Union by size and path halving; written here because its one use (the
+/// components of a support graph, in `sinkhorn::bridges`) needs a dozen
+/// lines, not a graph library.
 #[derive(Debug, Clone)]
 pub(crate) struct DisjointSets {
     parent: Vec<usize>,
@@ -21,7 +21,7 @@ impl DisjointSets {
     }
 
     /// The representative of `i`'s set.
-    pub fn find(&mut self, mut i: usize) -> usize {
+    fn find(&mut self, mut i: usize) -> usize {
         while self.parent[i] != i {
             self.parent[i] = self.parent[self.parent[i]];
             i = self.parent[i];
@@ -29,18 +29,17 @@ impl DisjointSets {
         i
     }
 
-    /// Merges the sets of `a` and `b`; `false` if they were already one set.
-    pub fn union(&mut self, a: usize, b: usize) -> bool {
+    /// Merges the sets of `a` and `b`.
+    pub fn union(&mut self, a: usize, b: usize) {
         let (mut a, mut b) = (self.find(a), self.find(b));
         if a == b {
-            return false;
+            return;
         }
         if self.size[a] < self.size[b] {
             std::mem::swap(&mut a, &mut b);
         }
         self.parent[b] = a;
         self.size[a] += self.size[b];
-        true
     }
 
     /// Dense labels `0..k` of the sets, in order of their smallest element, and `k`.
@@ -70,10 +69,10 @@ mod tests {
     fn unions_give_the_connected_components() {
         // Edges 0–3, 3–5, 1–4 over 0..7: components {0,3,5}, {1,4}, {2}, {6}.
         let mut sets = DisjointSets::new(7);
-        assert!(sets.union(0, 3));
-        assert!(sets.union(5, 3));
-        assert!(sets.union(1, 4));
-        assert!(!sets.union(0, 5), "0 and 5 were already joined");
+        sets.union(0, 3);
+        sets.union(5, 3);
+        sets.union(1, 4);
+        sets.union(0, 5);
         let (labels, count) = sets.labels();
         assert_eq!(count, 4);
         assert_eq!(labels, vec![0, 1, 2, 0, 1, 0, 3]);

@@ -22,16 +22,16 @@
 //! benchmark pairs this happens after the coarse-to-fine jump, when the
 //! support graph falls into components whose source and target masses differ
 //! (one blob grew between the images), joined by no block pair or only by
-//! weak ones (plan mass below `e^−24` of a cluster's; the others carry more
-//! than `e^−5`). Mass then has to cross a bottleneck, and the scaling's
+//! weak ones (plan mass `e^−9` to `e^−80` of a cluster's, where the links
+//! inside components carry more than `e^−4.5`). Mass then has to cross a bottleneck, and the scaling's
 //! potentials drift apart per component without converging. Two fallbacks:
 //! 1. **Bridged** (`bridges`): the problem is lumped per component of the
 //!    graph of strong links (mass at least `e^−WEAK_LINK` of the smaller
 //!    cluster's), with bridges across components: block pairs outside the
 //!    support, each with the upper bound `A_I B_J e^{−b_IJ/ε}` on its mass from
-//!    the block bound `b_IJ` on reduced costs (see `blocks`), up to
-//!    `BRIDGE_MARGIN · ε` above the bottleneck bound that connects all
-//!    components. Newton's method on the small lumped problem gives one shift
+//!    the block bound `b_IJ` on reduced costs (see `blocks`), for every
+//!    ordered pair of components those up to `BRIDGE_MARGIN · ε` above the
+//!    cheapest bound between them. Newton's method on the small lumped problem gives one shift
 //!    per component (1–8 steps on the benchmark pairs); applied, it moves the
 //!    components' relative potentials so the bridges carry the imbalance.
 //!    Since a bridge's mass is over-estimated, the shift errs short of the
