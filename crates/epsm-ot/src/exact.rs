@@ -188,7 +188,7 @@ pub(crate) struct Prices {
 
 /// Steps 1–3 of the module doc without the optimality check: the warm start,
 /// the candidate graph and the auction's prices (feasible on the graph only).
-pub(crate) fn sparse_prices(
+fn sparse_prices(
     x: &Clustered,
     y: &Clustered,
     diameter_sq: f64,

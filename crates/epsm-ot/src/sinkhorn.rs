@@ -21,7 +21,7 @@
 //! | `sinkhorn.annealing_overrelaxation` | ω of the fine-phase updates      | 1.5     | [1, 2)     |
 //! | `sinkhorn.exact_prices`    | warm-start the final ε from exact duals   | false   | bool       |
 //! | `sinkhorn.cluster_size`    | mean points per block (see `blocks`)      | 32      | ≥ 1        |
-//! | `sinkhorn.jump_radii`      | coarse phase while `√ε` > this × mean cluster radius | 2 | > 0  |
+//! | `sinkhorn.jump_radii`      | coarse phase while `√ε` > this × mean cluster radius | 1.75 | > 0 |
 //! | `sinkhorn.coarse_period`   | fine updates per coarse correction (0: none) | 1    | ≥ 0        |
 //!
 //! **Loss**: `OT_ε = ⟨α, f⟩ + ⟨β, g⟩` (or, debiased,
@@ -114,7 +114,7 @@ impl Default for SinkhornSettings {
             annealing_overrelaxation: 1.5,
             exact_prices: false,
             cluster_size: 32,
-            jump_radii: 2.0,
+            jump_radii: 1.75,
             coarse_period: 1,
         }
     }

@@ -43,7 +43,7 @@
 //!    clusters that lack mass towards the block pairs just outside the support.
 //!
 //! Either way the caller rebuilds the support from the shifted potentials. (On
-//! seed 1 of the benchmark pair at n = 16384, clamped corrections alone needed
+//! seed 1 of the benchmark pair at n = 16384 with `jump_radii` 2, clamped corrections alone needed
 //! seven rebuilds in a row, the shift overshooting by ±30ε each time, 3.0 G
 //! pairs; one bridged correction: 2.2 G pairs. Seed 4's components are joined
 //! by one block pair of mass `e^−73` of a cluster's: 1.91 G pairs with one

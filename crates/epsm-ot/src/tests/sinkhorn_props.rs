@@ -253,22 +253,21 @@ fn same_result_with_one_and_two_threads() {
 }
 
 /// Seeds 1 and 4 of the benchmark pair at n = 16384: the support built from the
-/// jump's potentials falls into components with unequal masses (seed 1: no
-/// block pair joins them; seed 4: one with plan mass `e^−73` of a cluster's), so
-/// the corrections' cluster scalings do not converge; one bridged correction each
-/// fixes that. Before any such fallback seed 1 took 1969 updates (69 s); with
-/// clamped corrections alone, seven rebuilds of the first fine scale's support.
+/// jump's potentials falls into components with unequal masses, joined by no
+/// block pair or only by weak ones, so the corrections' cluster scalings do not
+/// converge; bridged corrections fix that without a clamped one. Before any such
+/// fallback seed 1 took 1969 updates (69 s); with clamped corrections alone, seven
+/// rebuilds of the first fine scale's support.
 #[test]
 fn bridged_corrections_rebuild_the_support_and_still_converge() {
     // Exact costs from `epsm bench ot --n 16384 --seed S --solver exact`.
-    for (seed, exact, bridged, clamped) in [(1, 0.035063, 1, 0), (4, 0.029463, 1, 0)] {
+    for (seed, exact) in [(1, 0.035063), (4, 0.029463)] {
         let (s, t) = blobs_pair(16384, seed).unwrap_or_else(|| panic!("fixture"));
         let r = solve(&s, &t, &SinkhornSettings::default());
         let p = plan(&r);
         let stats = &r.stats;
-        assert_eq!(
-            (stats.bridged_corrections, stats.clamped_corrections),
-            (bridged, clamped),
+        assert!(
+            stats.bridged_corrections > 0 && stats.clamped_corrections == 0,
             "seed {seed}: {stats:?}"
         );
         assert!(
