@@ -31,6 +31,7 @@ use obvhs::aabb::Aabb;
 use obvhs::cwbvh::CwBvh;
 use obvhs::cwbvh::node::{CwBvhNode, extract_byte64};
 
+use super::packet::{PacketHit, TrianglePacket};
 use super::triangle::RayShear;
 
 /// Widening of each box's exit distance: the slab distances `(plane − o)·inv`
@@ -270,14 +271,20 @@ impl ChildBoxes {
     }
 }
 
-/// How a node's eight child boxes are tested against a ray.
+/// How a node's eight child boxes, and the triangle packets of its leaves,
+/// are tested against a ray.
 pub(crate) trait BoxTest: Copy {
     /// The children whose boxes the ray enters within its `t` range (absent
     /// children never) and their entry distances.
     fn hits(self, boxes: &ChildBoxes, ray: &TraceRay) -> BoxHits;
+
+    /// The closest hit of `ray` within its `t` range among the lanes of
+    /// `packet` in `lanes` (bit `i` for lane `i`), in the order of
+    /// [`TrianglePacket::intersect_4x2`].
+    fn packet_hit(self, packet: &TrianglePacket, ray: &TraceRay, lanes: u32) -> Option<PacketHit>;
 }
 
-/// Box tests with 128-bit vectors, on every CPU.
+/// Box and packet tests with 128-bit vectors, on every CPU.
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Portable;
 
@@ -286,10 +293,15 @@ impl BoxTest for Portable {
     fn hits(self, boxes: &ChildBoxes, ray: &TraceRay) -> BoxHits {
         boxes.hits_4x2(ray)
     }
+
+    #[inline(always)]
+    fn packet_hit(self, packet: &TrianglePacket, ray: &TraceRay, lanes: u32) -> Option<PacketHit> {
+        packet.intersect_4x2(ray, lanes)
+    }
 }
 
-/// Box tests with 256-bit AVX vectors; a value exists only on a CPU with
-/// AVX (see [`Avx::detect`]). Same masks as [`Portable`].
+/// Box and packet tests with 256-bit AVX vectors; a value exists only on a
+/// CPU with AVX (see [`Avx::detect`]). Same masks and hits as [`Portable`].
 #[cfg(target_arch = "x86_64")]
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Avx(());
@@ -311,6 +323,13 @@ impl BoxTest for Avx {
         // SAFETY: an `Avx` is only made by `Avx::detect` after finding AVX
         // on this CPU, which is all `hits_8` requires.
         unsafe { boxes.hits_8(ray) }
+    }
+
+    #[inline(always)]
+    #[allow(unsafe_code)]
+    fn packet_hit(self, packet: &TrianglePacket, ray: &TraceRay, lanes: u32) -> Option<PacketHit> {
+        // SAFETY: as `hits`: `intersect_8` requires only AVX.
+        unsafe { packet.intersect_8(ray, lanes) }
     }
 }
 
