@@ -50,7 +50,8 @@ const STACK: usize = 128;
 /// One node: eight child boxes and what each child is.
 #[derive(Clone, Copy, Debug)]
 struct FlatNode {
-    /// The child boxes (absent children: inverted, never entered).
+    /// The child boxes (absent children: inverted boxes, which the box test
+    /// reports as entered).
     boxes: ChildBoxes,
     /// Per child slot: the node index of an inner child (0 for leaf and
     /// absent children).
@@ -62,9 +63,9 @@ struct FlatNode {
     packet_count: u32,
     /// Bit `c` set when child `c` is a leaf.
     leaves: u8,
-    /// Bit `c` set when child `c` is an inner node (a ray with a NaN
-    /// origin "enters" every box, absent ones too: only these two masks say
-    /// which children exist).
+    /// Bit `c` set when child `c` is an inner node (the box test reports
+    /// absent children as entered: only these two masks say which children
+    /// exist).
     inner: u8,
 }
 
