@@ -1,6 +1,6 @@
 //! The traversal layout of the bottom-level BVHs: obvhs's CWBVH converted
 //! once into 8-wide nodes with exact `f32` child boxes and direct child
-//! references, and each node's leaves as packets of up to four triangles
+//! references, and each node's leaves as packets of up to eight triangles
 //! tested at once.
 //!
 //! Model: the tree is the one obvhs builds (same nodes, same leaves, same
@@ -15,7 +15,12 @@
 //! visit tests the packets holding a leaf child whose box the ray enters,
 //! with the lanes of the other children masked off. One packet per leaf
 //! instead left half the lanes empty and doubled the memory of large meshes
-//! (14.1 against 7.8 MB on `bench rays`' 100 k-triangle sphere).
+//! (14.1 against 7.8 MB on `bench rays`' 100 k-triangle sphere). Packets
+//! have eight lanes (one AVX pass) rather than four, so a node whose hit
+//! leaves held five to eight triangles needs one packet test instead of two
+//! (3 % fewer instructions per sample on `scenes/caustic-box.toml`, 8.5
+//! instead of 7.8 MB on that sphere: nodes with few leaf triangles leave
+//! more lanes empty).
 //!
 //! The walk (closest hit) tests a node's eight boxes at once, then first the
 //! packets of the leaf children hit (their hits lower `t_max`), then pushes
@@ -45,20 +50,22 @@ const STACK: usize = 128;
 /// One node: eight child boxes and what each child is.
 #[derive(Clone, Copy, Debug)]
 struct FlatNode {
-    /// The child boxes (absent children: inverted, never entered).
+    /// The child boxes (absent children: inverted boxes, which the box test
+    /// reports as entered).
     boxes: ChildBoxes,
     /// Per child slot: the node index of an inner child (0 for leaf and
     /// absent children).
     children: [u32; 8],
     /// The first of the packets holding the leaf children's triangles.
     first_packet: u32,
-    /// How many packets (up to six: eight leaves of at most three).
+    /// How many packets (up to three: eight leaves of at most three
+    /// triangles).
     packet_count: u32,
     /// Bit `c` set when child `c` is a leaf.
     leaves: u8,
-    /// Bit `c` set when child `c` is an inner node (a ray with a NaN
-    /// origin "enters" every box, absent ones too: only these two masks say
-    /// which children exist).
+    /// Bit `c` set when child `c` is an inner node (the box test reports
+    /// absent children as entered: only these two masks say which children
+    /// exist).
     inner: u8,
 }
 
@@ -198,9 +205,7 @@ impl FlatBvh {
                 if lanes == 0 {
                     continue;
                 }
-                let Some(hit) =
-                    packet.intersect(ray.origin, &ray.shear, ray.t_min, ray.t_max, lanes)
-                else {
+                let Some(hit) = boxes.packet_hit(packet, ray, lanes) else {
                     continue;
                 };
                 ray.t_max = hit.t;
@@ -259,7 +264,7 @@ impl FlatBvh {
 mod tests {
     use super::*;
     use crate::bvh::Portable;
-    use crate::bvh::triangle::RayShear;
+    use crate::bvh::triangle::{PackedTriangle, RayShear};
     use crate::scene::Mesh;
     use epsm_testkit::Rng;
     use glam::Vec3A;
@@ -374,9 +379,14 @@ mod tests {
     #[test]
     fn lanes_of_children() {
         let mut rng = Rng::new(3);
-        let (built, _) = built_soup(&mut rng, 10);
-        for bits in [[1u8, 1, 2, 128], [4, 8, 8, 16], [64, 128, 1, 2]] {
-            let packet = TrianglePacket::new(&built.triangles[..4], &[0, 1, 2, 3], &bits);
+        let (built, _) = built_soup(&mut rng, 20);
+        let ids: Vec<u32> = (0..LANES as u32).collect();
+        for bits in [
+            [1u8, 1, 2, 128, 4, 8, 8, 16],
+            [4, 8, 8, 16, 64, 128, 1, 2],
+            [64, 128, 1, 2, 32, 32, 32, 1],
+        ] {
+            let packet = TrianglePacket::new(&built.triangles[..LANES], &ids, &bits);
             for children in 0..256u32 {
                 let expected = (0..LANES)
                     .filter(|&l| u32::from(bits[l]) & children != 0)
@@ -392,18 +402,51 @@ mod tests {
         assert_eq!(short.lanes_of(0xff), 0b11);
     }
 
+    /// The reference of a packet's hit: the scalar test of each lane in
+    /// `lanes`, lanes 0–3 then 4–7, each half's closest hit (the lowest lane
+    /// among equal `t`) lowering `t_max` for the next.
+    fn scalar_packet_hit(
+        triangles: &[PackedTriangle],
+        origin: Vec3A,
+        shear: &RayShear,
+        lanes: u32,
+    ) -> Option<(usize, f32, f32, f32)> {
+        let (mut best, mut t_max) = (None, 10.0);
+        for half in [0..4, 4..LANES] {
+            let hit = half
+                .filter(|&l| l < triangles.len() && lanes & (1 << l) != 0)
+                .filter_map(|l| Some((l, triangles[l].intersect(origin, shear, 0.0, t_max)?)))
+                .min_by(|a, b| a.1.t.total_cmp(&b.1.t));
+            if let Some((l, h)) = hit {
+                t_max = h.t;
+                best = Some((l, h.t, h.b1, h.b2));
+            }
+        }
+        best
+    }
+
     /// Every lane of a packet hits exactly as the scalar test of its
-    /// triangle, through edges, vertices and the f64 fallback.
+    /// triangle, through edges, vertices and the f64 fallback, with both
+    /// packet tests (AVX where the CPU has it), for packets of one to eight
+    /// triangles, some repeated in both halves (ties across halves), and
+    /// random lane masks.
     #[test]
     fn packet_lanes_match_scalar_test() {
+        #[cfg(target_arch = "x86_64")]
+        let avx = crate::bvh::Avx::detect();
         let mut rng = Rng::new(9);
-        let (built, _) = built_soup(&mut rng, 400);
-        for (k, chunk) in built.triangles.chunks(3).enumerate() {
-            let ids: Vec<u32> = (0..chunk.len() as u32).collect();
-            let packet = TrianglePacket::new(chunk, &ids, &[1; LANES][..chunk.len()]);
+        let (built, _) = built_soup(&mut rng, 600);
+        let (mut hits, mut second_half_ties) = (0, 0);
+        for (k, chunk) in built.triangles.chunks(5).enumerate() {
+            // Packets of 1..=8 lanes; from 6 lanes on, lanes 5.. repeat
+            // lanes 0.. (the same triangle in both halves).
+            let len = 1 + k % LANES;
+            let triangles: Vec<_> = (0..len).map(|l| chunk[l % 5 % chunk.len()]).collect();
+            let ids: Vec<u32> = (0..len as u32).collect();
+            let packet = TrianglePacket::new(&triangles, &ids, &[1; LANES][..len]);
             for i in 0..40 {
                 // Rays aimed at a vertex, an edge point or inside.
-                let target = chunk[i % chunk.len()].vertices();
+                let target = triangles[i % len].vertices();
                 let w = match i % 3 {
                     0 => [1.0, 0.0, 0.0],
                     1 => [0.5, 0.5, 0.0],
@@ -411,19 +454,30 @@ mod tests {
                 };
                 let aim = target[0] * w[0] + target[1] * w[1] + target[2] * w[2];
                 let origin = Vec3A::from(rng.dvec3(-2.0, 2.0).as_vec3());
-                let shear = RayShear::new(aim - origin);
-                let scalar = chunk
-                    .iter()
-                    .enumerate()
-                    .filter_map(|(l, t)| Some((l, t.intersect(origin, &shear, 0.0, 10.0)?)))
-                    .min_by(|a, b| a.1.t.total_cmp(&b.1.t));
-                let lanes = packet.intersect(origin, &shear, 0.0, 10.0, 0b1111);
-                assert_eq!(
-                    lanes.map(|h| (h.lane, h.t, h.b1, h.b2)),
-                    scalar.map(|(l, h)| (l, h.t, h.b1, h.b2)),
-                    "packet {k} ray {i}"
-                );
+                let ray = TraceRay::new(origin, aim - origin, 0.0, 10.0);
+                let lanes = if i % 4 == 0 {
+                    rng.below(256) as u32
+                } else {
+                    0xff
+                };
+                let scalar = scalar_packet_hit(&triangles, origin, &ray.shear, lanes);
+                let portable = packet.intersect_4x2(&ray, lanes);
+                let found = portable.map(|h| (h.lane, h.t, h.b1, h.b2));
+                assert_eq!(found, scalar, "packet {k} ray {i}");
+                #[cfg(target_arch = "x86_64")]
+                if avx.is_some() {
+                    // SAFETY: the CPU has AVX (`Avx::detect`).
+                    #[allow(unsafe_code)]
+                    let wide = unsafe { packet.intersect_8(&ray, lanes) };
+                    assert_eq!(wide, portable, "packet {k} ray {i}");
+                }
+                hits += usize::from(found.is_some());
+                second_half_ties += usize::from(found.is_some_and(|h| h.0 >= 5));
             }
         }
+        assert!(
+            hits > 3000 && second_half_ties > 200,
+            "{hits} {second_half_ties}"
+        );
     }
 }

@@ -3,7 +3,7 @@
 //!
 //! Model: Ylitie, Karras and Laine, "Efficient Incoherent Ray Traversal on
 //! GPUs Through Compressed Wide BVHs" (HPG 2017), as built by obvhs; the top
-//! level is walked in obvhs's order by our own loop (module `walk`). Four
+//! level is walked in obvhs's order by our own loop (module `walk`). Five
 //! changes to obvhs's node test:
 //! - child boxes are stored as exact `f32` planes ([`ChildBoxes`]; 224 bytes
 //!   per node instead of 80): converting 48 quantised bytes to floats was a
@@ -19,6 +19,14 @@
 //!   can cull boxes the ray runs along a few ULPs inside), with the sign
 //!   matching the octant test `dir < 0`, so rays with zero components never
 //!   produce NaN;
+//! - per axis, the entry and exit distances are the smaller and the larger
+//!   of the distances to the box's two planes, rather than the distances to
+//!   the planes the direction's signs pick: the same values for every box
+//!   (up to the sign of a zero, which compares equal), without the per-ray
+//!   plane offsets the walk had to keep in registers (2.4 % fewer
+//!   instructions per sample on `scenes/caustic-box.toml`). Absent children
+//!   (inverted boxes) then count as entered: callers mask the children a
+//!   node has;
 //! - the eight child boxes are tested in one pass of 256-bit AVX operations
 //!   where the CPU has AVX ([`Avx`], detected at run time), else as two
 //!   halves of 128-bit operations ([`Portable`]); both do the same operations
@@ -31,6 +39,7 @@ use obvhs::aabb::Aabb;
 use obvhs::cwbvh::CwBvh;
 use obvhs::cwbvh::node::{CwBvhNode, extract_byte64};
 
+use super::packet::{PacketHit, TrianglePacket};
 use super::triangle::RayShear;
 
 /// Widening of each box's exit distance: the slab distances `(plane − o)·inv`
@@ -54,8 +63,6 @@ pub(crate) struct TraceRay {
     pub shear: RayShear,
     /// Reciprocals of the clamped direction components.
     inv_dir: Vec3A,
-    /// Per axis, the plane side (0 = min, 1 = max) the ray enters a box by.
-    near: [usize; 3],
     /// Smallest accepted `t`.
     pub t_min: f32,
     /// Largest accepted `t`; traversal lowers it to the closest hit so far.
@@ -73,14 +80,12 @@ impl TraceRay {
         let tiny = Vec3A::select(neg, Vec3A::splat(-TINY_DIR), Vec3A::splat(TINY_DIR));
         let safe = Vec3A::select(dir.abs().cmpge(Vec3A::splat(TINY_DIR)), dir, tiny);
         let bits = neg.bitmask();
-        let near = [bits & 1, (bits >> 1) & 1, (bits >> 2) & 1].map(|b| b as usize);
         let oct_inv4 = OCT_INV4[(!bits & 7) as usize];
         Self {
             origin,
             dir,
             shear: RayShear::new(dir),
             inv_dir: safe.recip(),
-            near,
             t_min,
             t_max,
             oct_inv4,
@@ -117,6 +122,8 @@ pub(crate) struct WideNode {
     child_meta: [u8; 8],
     /// Which children are inner nodes.
     pub imask: u8,
+    /// Bit `c` set when child `c` exists.
+    present: u8,
 }
 
 impl WideNode {
@@ -129,6 +136,9 @@ impl WideNode {
             primitive_base_idx: node.primitive_base_idx,
             child_meta: node.child_meta,
             imask: node.imask,
+            present: (0..8)
+                .filter(|&c| !node.is_child_empty(c))
+                .fold(0, |m, c| m | 1 << c),
         }
     }
 
@@ -138,7 +148,7 @@ impl WideNode {
     /// obvhs's `CwBvhNode::get_child_and_index_bits`).
     #[inline(always)]
     pub fn intersect(&self, ray: &TraceRay, boxes: impl BoxTest) -> u32 {
-        let mut hit_children = boxes.hits(&self.boxes, ray).mask;
+        let mut hit_children = boxes.hits(&self.boxes, ray).mask & u32::from(self.present);
         let meta8 = u64::from_le_bytes(self.child_meta);
         let oct_inv8 = u64::from(ray.oct_inv4) * 0x1_0000_0001;
         let inner8 = ((meta8 & (meta8 << 1)) & 0x1010_1010_1010_1010) >> 4;
@@ -162,8 +172,8 @@ impl WideNode {
 pub(crate) struct Lanes8(pub [f32; 8]);
 
 /// The eight child boxes of a wide node as exact `f32` planes (one lane per
-/// child, in child order); absent children get inverted boxes that no ray
-/// enters.
+/// child, in child order); absent children get inverted boxes, which the
+/// slab test reports as entered (callers mask them).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct ChildBoxes {
     /// `planes[axis][0 = min, 1 = max]`.
@@ -173,7 +183,8 @@ pub(crate) struct ChildBoxes {
 /// The result of a ray against [`ChildBoxes`].
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct BoxHits {
-    /// Bit `c` set when the ray enters child `c`'s box within its `t` range.
+    /// Bit `c` set when the ray enters child `c`'s box within its `t` range
+    /// (always for an absent child).
     pub mask: u32,
     /// Per child, the entry distance (in units of the ray's direction,
     /// clamped below by `t_min`); meaningful only where `mask` is set.
@@ -207,12 +218,11 @@ impl ChildBoxes {
         for half in 0..2 {
             let lanes = |plane: &Lanes8| Vec4::from_slice(&plane.0[4 * half..4 * half + 4]);
             let slab = |axis: usize| {
-                let near_side = ray.near[axis] & 1;
-                let near = lanes(&self.planes[axis][near_side]);
-                let far = lanes(&self.planes[axis][near_side ^ 1]);
                 let o = Vec4::splat(ray.origin[axis]);
                 let inv = Vec4::splat(ray.inv_dir[axis]);
-                ((near - o) * inv, (far - o) * inv)
+                let lo = (lanes(&self.planes[axis][0]) - o) * inv;
+                let hi = (lanes(&self.planes[axis][1]) - o) * inv;
+                (lo.min(hi), lo.max(hi))
             };
             let ((x0, x1), (y0, y1), (z0, z1)) = (slab(0), slab(1), slab(2));
             let t0 = x0.max(y0).max(z0).max(Vec4::splat(ray.t_min));
@@ -240,15 +250,11 @@ impl ChildBoxes {
         // the aligned load reads; AVX is enabled on this function.
         let load = |plane: &Lanes8| -> __m256 { unsafe { _mm256_load_ps(plane.0.as_ptr()) } };
         let slab = |axis: usize| {
-            let near_side = ray.near[axis] & 1;
-            let near = load(&self.planes[axis][near_side]);
-            let far = load(&self.planes[axis][near_side ^ 1]);
             let o = _mm256_set1_ps(ray.origin[axis]);
             let inv = _mm256_set1_ps(ray.inv_dir[axis]);
-            (
-                _mm256_mul_ps(_mm256_sub_ps(near, o), inv),
-                _mm256_mul_ps(_mm256_sub_ps(far, o), inv),
-            )
+            let lo = _mm256_mul_ps(_mm256_sub_ps(load(&self.planes[axis][0]), o), inv);
+            let hi = _mm256_mul_ps(_mm256_sub_ps(load(&self.planes[axis][1]), o), inv);
+            (_mm256_min_ps(lo, hi), _mm256_max_ps(lo, hi))
         };
         let ((x0, x1), (y0, y1), (z0, z1)) = (slab(0), slab(1), slab(2));
         let t0 = _mm256_max_ps(
@@ -270,14 +276,21 @@ impl ChildBoxes {
     }
 }
 
-/// How a node's eight child boxes are tested against a ray.
+/// How a node's eight child boxes, and the triangle packets of its leaves,
+/// are tested against a ray.
 pub(crate) trait BoxTest: Copy {
-    /// The children whose boxes the ray enters within its `t` range (absent
-    /// children never) and their entry distances.
+    /// The children whose boxes the ray enters within its `t` range and
+    /// their entry distances (absent children count as entered: the caller
+    /// masks them).
     fn hits(self, boxes: &ChildBoxes, ray: &TraceRay) -> BoxHits;
+
+    /// The closest hit of `ray` within its `t` range among the lanes of
+    /// `packet` in `lanes` (bit `i` for lane `i`), in the order of
+    /// [`TrianglePacket::intersect_4x2`].
+    fn packet_hit(self, packet: &TrianglePacket, ray: &TraceRay, lanes: u32) -> Option<PacketHit>;
 }
 
-/// Box tests with 128-bit vectors, on every CPU.
+/// Box and packet tests with 128-bit vectors, on every CPU.
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Portable;
 
@@ -286,10 +299,15 @@ impl BoxTest for Portable {
     fn hits(self, boxes: &ChildBoxes, ray: &TraceRay) -> BoxHits {
         boxes.hits_4x2(ray)
     }
+
+    #[inline(always)]
+    fn packet_hit(self, packet: &TrianglePacket, ray: &TraceRay, lanes: u32) -> Option<PacketHit> {
+        packet.intersect_4x2(ray, lanes)
+    }
 }
 
-/// Box tests with 256-bit AVX vectors; a value exists only on a CPU with
-/// AVX (see [`Avx::detect`]). Same masks as [`Portable`].
+/// Box and packet tests with 256-bit AVX vectors; a value exists only on a
+/// CPU with AVX (see [`Avx::detect`]). Same masks and hits as [`Portable`].
 #[cfg(target_arch = "x86_64")]
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Avx(());
@@ -311,6 +329,13 @@ impl BoxTest for Avx {
         // SAFETY: an `Avx` is only made by `Avx::detect` after finding AVX
         // on this CPU, which is all `hits_8` requires.
         unsafe { boxes.hits_8(ray) }
+    }
+
+    #[inline(always)]
+    #[allow(unsafe_code)]
+    fn packet_hit(self, packet: &TrianglePacket, ray: &TraceRay, lanes: u32) -> Option<PacketHit> {
+        // SAFETY: as `hits`: `intersect_8` requires only AVX.
+        unsafe { packet.intersect_8(ray, lanes) }
     }
 }
 
@@ -358,4 +383,86 @@ pub(crate) fn exact_child_boxes(bvh: &CwBvh, leaf_box: impl Fn(u32) -> Aabb) -> 
         }
     }
     child_boxes
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use epsm_testkit::Rng;
+
+    /// The reference slab test: per axis, the distances to the planes the
+    /// direction's sign picks (near plane `max` when `dir < 0`), as before
+    /// the min/max form.
+    fn sign_picked(boxes: &[Aabb; 8], ray: &TraceRay, child: usize) -> (bool, f32) {
+        let (mut t0, mut t1) = (ray.t_min, f32::INFINITY);
+        for axis in 0..3 {
+            let (lo, hi) = (boxes[child].min[axis], boxes[child].max[axis]);
+            let (near, far) = if ray.dir[axis] < 0.0 {
+                (hi, lo)
+            } else {
+                (lo, hi)
+            };
+            let o = ray.origin[axis];
+            t0 = ((near - o) * ray.inv_dir[axis]).max(t0);
+            t1 = t1.min((far - o) * ray.inv_dir[axis]);
+        }
+        let t1 = (t1 * EXIT_SCALE).min(ray.t_max);
+        (t0 <= t1, t0)
+    }
+
+    /// For present children, the min/max slab test gives the masks and
+    /// entry distances of the sign-picked one (rays with zero direction
+    /// components and origins on box planes included), with both box tests.
+    #[test]
+    fn min_max_slabs_match_sign_picked_planes() {
+        let mut rng = Rng::new(11);
+        let mut entered = 0;
+        for i in 0..20_000 {
+            let boxes: [Aabb; 8] = std::array::from_fn(|_| {
+                let a = Vec3A::from(rng.dvec3(-2.0, 2.0).as_vec3());
+                let b = a + Vec3A::from(rng.dvec3(0.0, 1.0).as_vec3());
+                Aabb::new(a, b)
+            });
+            let present: [bool; 8] = std::array::from_fn(|_| rng.below(4) != 0);
+            let child_boxes = ChildBoxes::new(&boxes, present);
+            let mut origin = Vec3A::from(rng.dvec3(-3.0, 3.0).as_vec3());
+            if i % 7 == 0 {
+                origin[rng.below(3)] = boxes[rng.below(8)].min[rng.below(3)];
+            }
+            let mut dir = if i % 2 == 0 {
+                // At a box, so that many rays enter some.
+                let b = &boxes[rng.below(8)];
+                (b.min + b.max) * 0.5 - origin
+            } else {
+                Vec3A::from(rng.unit().as_vec3())
+            };
+            if i % 5 == 0 {
+                dir[rng.below(3)] = if i % 2 == 0 { 0.0 } else { -0.0 };
+            }
+            let t_max = if i % 3 == 0 {
+                rng.range(0.0, 3.0) as f32
+            } else {
+                f32::INFINITY
+            };
+            let ray = TraceRay::new(origin, dir, 0.0, t_max);
+            let hits = [Portable.hits(&child_boxes, &ray)]
+                .into_iter()
+                .chain(Avx::detect().map(|avx| avx.hits(&child_boxes, &ray)));
+            for hits in hits {
+                for child in (0..8).filter(|&c| present[c]) {
+                    let (enters, entry) = sign_picked(&boxes, &ray, child);
+                    assert_eq!(
+                        hits.mask & (1 << child) != 0,
+                        enters,
+                        "ray {i} child {child}"
+                    );
+                    if enters {
+                        assert!(hits.entry.0[child] == entry, "ray {i} child {child}");
+                        entered += 1;
+                    }
+                }
+            }
+        }
+        assert!(entered > 10_000, "{entered}");
+    }
 }

@@ -1,6 +1,6 @@
 //! Watertight ray–triangle intersection in `f32`: the per-ray constants,
 //! the stored triangle and the one-triangle reference test (traversal tests
-//! four at a time, module `packet`, rounding exactly as this one).
+//! eight at a time, module `packet`, rounding exactly as this one).
 //!
 //! Model: Woop, Benthin and Wald, "Watertight Ray/Triangle Intersection"
 //! (JCGT 2013). Per ray ([`RayShear`]): the axis `kz` where the direction is

@@ -36,6 +36,7 @@ pub struct Dielectric {
 
 impl Dielectric {
     /// Chooses reflection (`u_lobe < F`) or refraction of `wi` (local, either side).
+    #[inline]
     pub(super) fn sample(&self, wi: Vec3, u_lobe: f32) -> Option<BsdfSample> {
         // η(transmitted side) / η(wi side), and the normal on the side of wi.
         let (eta, n) = if wi.z >= 0.0 {

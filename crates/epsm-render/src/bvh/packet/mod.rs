@@ -1,8 +1,8 @@
-//! Up to four triangles tested against one ray at once.
+//! Up to eight triangles tested against one ray at once.
 //!
 //! Model: the watertight test of module `triangle` (Woop, Benthin and Wald,
-//! JCGT 2013) with one triangle per lane of 128-bit vectors: the vertices are
-//! stored per coordinate (structure of arrays), so the ray's axis permutation
+//! JCGT 2013) with one triangle per lane: the vertices are stored per
+//! coordinate (structure of arrays), so the ray's axis permutation
 //! `(kx, ky, kz)` only picks which lanes to load. Every lane rounds exactly as
 //! [`PackedTriangle::intersect`] does (the shear `v[kx] + (−Sx)·v[kz]` is the
 //! product `M·v` of its matrix without the exact zero terms; no fused
@@ -11,30 +11,49 @@
 //! recomputed in `f64` for that lane, as there. Unused lanes hold NaN
 //! vertices, which every range test fails.
 //!
+//! Two ways to test a packet, with the same result: all eight lanes in one
+//! pass of 256-bit AVX operations (`TrianglePacket::intersect_8`, module
+//! `avx`), or as
+//! two halves of four lanes in 128-bit operations
+//! ([`TrianglePacket::intersect_4x2`], on every CPU).
+//!
 //! Each lane carries the bit of the node child its triangle belongs to, so a
-//! walk tests only the lanes of the children whose boxes the ray enters. Of
-//! several lanes hit, the closest wins; among equal `t`, the lowest lane.
+//! walk tests only the lanes of the children whose boxes the ray enters. The
+//! winner among the lanes hit is the one of testing the halves in order
+//! (lanes 0–3, then 4–7), each half's hit lowering `t_max` for the next
+//! half: the closest lane of the first half, replaced by the closest lane of
+//! the second half that passes the range tests against that `t` (so among
+//! equal `t` across halves the second half wins, within a half the lowest
+//! lane). This is the order of the four-lane packets of earlier versions, so
+//! walks return the same hits as they did.
 //!
 //! No parameters.
 
-use glam::{Vec3A, Vec4};
+#[cfg(target_arch = "x86_64")]
+mod avx;
 
-use super::triangle::{PackedTriangle, RayShear};
+use glam::Vec4;
+
+use super::node::{Lanes8, TraceRay};
+use super::triangle::PackedTriangle;
 
 /// Triangles per packet.
-pub(crate) const LANES: usize = 4;
+pub(crate) const LANES: usize = 8;
+
+/// Lanes per half of a packet (one 128-bit vector).
+const HALF: usize = LANES / 2;
 
 /// Up to [`LANES`] triangles, coordinates by vertex and axis, with the
 /// caller's id of each.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct TrianglePacket {
     /// `p[vertex][axis]`, lane `i` = triangle `i` (NaN in unused lanes).
-    p: [[Vec4; 3]; 3],
+    p: [[Lanes8; 3]; 3],
     /// The id of each lane's triangle (`u32::MAX` in unused lanes).
     ids: [u32; LANES],
     /// Byte `i`: the caller's child bit of lane `i`'s triangle (the node's
     /// leaf child it belongs to; 0 in unused lanes).
-    children: u32,
+    children: u64,
 }
 
 /// The closest hit in a packet.
@@ -70,31 +89,32 @@ impl TrianglePacket {
         lane_children[..children.len()].copy_from_slice(children);
         let mut lane_ids = [u32::MAX; LANES];
         lane_ids[..ids.len()].copy_from_slice(ids);
-        let mut p = [[[f32::NAN; LANES]; 3]; 3];
+        let mut p = [[Lanes8([f32::NAN; LANES]); 3]; 3];
         for (lane, triangle) in triangles.iter().enumerate() {
             for (vertex, v) in triangle.vertices().iter().enumerate() {
                 for axis in 0..3 {
-                    p[vertex][axis][lane] = v[axis];
+                    p[vertex][axis].0[lane] = v[axis];
                 }
             }
         }
         Self {
-            p: p.map(|v| v.map(Vec4::from_array)),
+            p,
             ids: lane_ids,
-            children: u32::from_le_bytes(lane_children),
+            children: u64::from_le_bytes(lane_children),
         }
     }
 
     /// The lanes (bit `i` for lane `i`) whose triangles belong to a child in
-    /// `children` (bit `c` for child `c`).
+    /// `children` (bit `c` for child `c`, `c < 8`).
     #[inline(always)]
     pub fn lanes_of(&self, children: u32) -> u32 {
+        const BYTES: u64 = 0x0101_0101_0101_0101;
         // Per byte: nonzero → bit 7 set (no carries between bytes).
-        let x = self.children & (children * 0x0101_0101);
-        let high = (((x & 0x7f7f_7f7f) + 0x7f7f_7f7f) | x) & 0x8080_8080;
-        // Bits 7, 15, 23, 31 to bits 21..25 by one multiply (the shifted
-        // copies land on distinct bits, so nothing carries).
-        ((high >> 7).wrapping_mul(0x0020_4081) >> 21) & 0xf
+        let x = self.children & (u64::from(children) * BYTES);
+        let high = (((x & (0x7f * BYTES)) + 0x7f * BYTES) | x) & (0x80 * BYTES);
+        // Bit 8i + 7 to bit 56 + i by one multiply (the shifted copies land
+        // on distinct bits, so nothing carries).
+        ((high >> 7).wrapping_mul(0x0102_0408_1020_4080) >> 56) as u32
     }
 
     /// The id of the triangle in `lane`.
@@ -103,28 +123,49 @@ impl TrianglePacket {
         self.ids[lane % LANES]
     }
 
-    /// The closest hit of the ray `origin + t·dir` (`dir` given by its
-    /// `shear`) with `t` in `[t_min, t_max]`, if any lane in `lanes` (bit
-    /// `i` for lane `i`) has one.
+    /// The closest hit of `ray` with `t` in its range, if any lane in
+    /// `lanes` (bit `i` for lane `i`) has one: the two halves one after the
+    /// other with 128-bit vectors (SSE2 on x86-64).
     #[inline(always)]
-    pub fn intersect(
+    pub fn intersect_4x2(&self, ray: &TraceRay, lanes: u32) -> Option<PacketHit> {
+        let mut best = None;
+        let mut t_max = ray.t_max;
+        for half in 0..2 {
+            let half_lanes = (lanes >> (HALF * half)) & 0xf;
+            if half_lanes == 0 {
+                continue;
+            }
+            if let Some(hit) = self.intersect_half(half, ray, t_max, half_lanes) {
+                t_max = hit.t;
+                best = Some(hit);
+            }
+        }
+        best
+    }
+
+    /// [`TrianglePacket::intersect_4x2`] for lanes `HALF·half ..` (`lanes`:
+    /// bit `i` for lane `HALF·half + i`) and `t` in `[ray.t_min, t_max]`.
+    #[inline(always)]
+    fn intersect_half(
         &self,
-        origin: Vec3A,
-        shear: &RayShear,
-        t_min: f32,
+        half: usize,
+        ray: &TraceRay,
         t_max: f32,
         lanes: u32,
     ) -> Option<PacketHit> {
+        let (shear, t_min) = (&ray.shear, ray.t_min);
         // Clamped (a no-op) so that the loads below need no bounds checks.
         let [kx, ky, kz] = shear.axes.map(|k| k.min(2));
-        let o = origin.to_array();
+        let range = HALF * (half & 1)..HALF * (half & 1) + HALF;
+        let load = |p: &Lanes8| Vec4::from_slice(&p.0[range.clone()]);
+        let o = ray.origin.to_array();
         let (ox, oy, oz) = (Vec4::splat(o[kx]), Vec4::splat(o[ky]), Vec4::splat(o[kz]));
         let [nsx, nsy, sz] = shear.kz_col.map(Vec4::splat);
-        let sheared = |p: &[Vec4; 3]| {
-            let z = p[kz] - oz;
+        let sheared = |p: &[Lanes8; 3]| {
+            let z = load(&p[kz]) - oz;
             Sheared {
-                x: (p[kx] - ox) + nsx * z,
-                y: (p[ky] - oy) + nsy * z,
+                x: (load(&p[kx]) - ox) + nsx * z,
+                y: (load(&p[ky]) - oy) + nsy * z,
                 z: sz * z,
             }
         };
@@ -137,7 +178,10 @@ impl TrianglePacket {
         let (mut u, mut v, mut w) = (edge(&c, &b), edge(&a, &c), edge(&b, &a));
         let zero = u.cmpeq(Vec4::ZERO) | v.cmpeq(Vec4::ZERO) | w.cmpeq(Vec4::ZERO);
         if zero.any() {
-            (u, v, w) = edges_f64(zero.bitmask(), [&a, &b, &c], [u, v, w]);
+            let xy = |s: &Sheared| [s.x.to_array(), s.y.to_array()];
+            let uvw = [u, v, w].map(|x| x.to_array());
+            [u, v, w] =
+                edges_f64(zero.bitmask(), [xy(&a), xy(&b), xy(&c)], uvw).map(Vec4::from_array);
         }
         let negative = u.cmplt(Vec4::ZERO) | v.cmplt(Vec4::ZERO) | w.cmplt(Vec4::ZERO);
         let positive = u.cmpgt(Vec4::ZERO) | v.cmpgt(Vec4::ZERO) | w.cmpgt(Vec4::ZERO);
@@ -166,19 +210,11 @@ impl TrianglePacket {
             return None;
         }
         let t = t.to_array();
-        let mut lane = mask.trailing_zeros() as usize;
-        mask &= mask - 1;
-        while mask != 0 {
-            let other = mask.trailing_zeros() as usize;
-            mask &= mask - 1;
-            if t[other] < t[lane] {
-                lane = other;
-            }
-        }
+        let lane = closest(mask, &t);
         let sign = if flip.test(lane) { -1.0 } else { 1.0 };
         let inv = inv.to_array()[lane];
         Some(PacketHit {
-            lane,
+            lane: HALF * (half & 1) + lane,
             t: t[lane],
             b1: (sign * v.to_array()[lane]) * inv,
             b2: (sign * w.to_array()[lane]) * inv,
@@ -186,16 +222,34 @@ impl TrianglePacket {
     }
 }
 
-/// The edge functions `[u, v, w]` with those of the lanes in `lanes`
-/// recomputed in `f64` from the sheared vertices `[a, b, c]`.
+/// The lane of `mask` (not empty) with the smallest `t`; among equal `t`,
+/// the lowest.
+#[inline(always)]
+fn closest<const N: usize>(mut mask: u32, t: &[f32; N]) -> usize {
+    let mut lane = mask.trailing_zeros() as usize % N;
+    mask &= mask - 1;
+    while mask != 0 {
+        let other = mask.trailing_zeros() as usize % N;
+        mask &= mask - 1;
+        if t[other] < t[lane] {
+            lane = other;
+        }
+    }
+    lane
+}
+
+/// The edge functions `[u, v, w]` (per lane) with those of the lanes in
+/// `lanes` recomputed in `f64` from the sheared vertices `[a, b, c]` (each
+/// `[x, y]`, per lane).
 #[cold]
 #[inline(never)]
-fn edges_f64(lanes: u32, [a, b, c]: [&Sheared; 3], uvw: [Vec4; 3]) -> (Vec4, Vec4, Vec4) {
-    let coords = |s: &Sheared| [s.x.to_array(), s.y.to_array()];
-    let [a, b, c] = [coords(a), coords(b), coords(c)];
-    let mut uvw = uvw.map(|x| x.to_array());
-    for lane in (0..LANES).filter(|&l| lanes & (1 << l) != 0) {
-        let edge64 = |p: &[[f32; LANES]; 2], q: &[[f32; LANES]; 2]| {
+fn edges_f64<const N: usize>(
+    lanes: u32,
+    [a, b, c]: [[[f32; N]; 2]; 3],
+    mut uvw: [[f32; N]; 3],
+) -> [[f32; N]; 3] {
+    for lane in (0..N).filter(|&l| lanes & (1 << l) != 0) {
+        let edge64 = |p: &[[f32; N]; 2], q: &[[f32; N]; 2]| {
             (f64::from(p[0][lane]) * f64::from(q[1][lane])
                 - f64::from(p[1][lane]) * f64::from(q[0][lane])) as f32
         };
@@ -203,6 +257,5 @@ fn edges_f64(lanes: u32, [a, b, c]: [&Sheared; 3], uvw: [Vec4; 3]) -> (Vec4, Vec
         uvw[1][lane] = edge64(&a, &c);
         uvw[2][lane] = edge64(&b, &a);
     }
-    let [u, v, w] = uvw.map(Vec4::from_array);
-    (u, v, w)
+    uvw
 }
