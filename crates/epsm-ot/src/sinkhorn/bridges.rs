@@ -56,7 +56,8 @@ pub(super) struct Lumped {
 }
 
 impl Lumped {
-    /// `None` if the graph is connected or the levels are not clusterings.
+    /// `None` if the graph is connected, falls into more than [`MAX_COMPONENTS`] components,
+    /// or the levels are not clusterings.
     ///
     /// Arguments as for `coarse::correct`, with the cluster masses `log_a, log_b` (log).
     #[allow(clippy::too_many_arguments)]
@@ -81,7 +82,7 @@ impl Lumped {
             }
         }
         let (labels, components) = sets.labels();
-        if components < 2 {
+        if !(2..=MAX_COMPONENTS).contains(&components) {
             return None;
         }
         let (src, dst) = labels.split_at(na);
@@ -101,7 +102,8 @@ impl Lumped {
                 best
             })
             .collect();
-        // Per ordered pair of components, the cheapest bound from one's sources to the other's targets.
+        // Per ordered pair of components, the cheapest bound from one's sources to the other's
+        // targets.
         let mut limit = vec![vec![f64::INFINITY; components]; components];
         for (best, &a) in cheapest.iter().zip(src) {
             for (l, b) in limit[a].iter_mut().zip(best) {
@@ -207,8 +209,8 @@ fn grounded_laplacian_solve(
 const NEWTON_STEPS: usize = 60;
 /// Most halvings of one Newton step before [`Lumped::solve`] gives up.
 const HALVINGS: usize = 60;
-/// Lumped problems with more components than this are not solved (a dense
-/// Laplacian solve per Newton step; the benchmark pairs have 2–4 components).
+/// Lumped problems with more components than this are not built (a dense elimination,
+/// `O(k³)`, per Newton step; the benchmark pairs have 2–4 components at default settings).
 const MAX_COMPONENTS: usize = 256;
 
 /// Per-cluster shifts (units of ε) from [`Lumped::solve`].
@@ -248,9 +250,6 @@ impl Lumped {
     /// factor: the objective is concave and `δu` its Newton direction).
     pub(super) fn solve(&self) -> Option<Solved> {
         let k = self.components;
-        if k > MAX_COMPONENTS {
-            return None;
-        }
         let free: Vec<usize> = (0..k)
             .filter(|&a| self.log_a[a] > f64::NEG_INFINITY)
             .collect();
