@@ -34,9 +34,10 @@ const BRIDGE_MARGIN: f64 = 10.0;
 /// The cluster problem lumped per connected component of the graph of strong links, with bridges.
 ///
 /// The graph joins source cluster `I` and target cluster `J` where the plan's mass on
-/// `(I, J)` is at least `e^−WEAK_LINK` of the smaller cluster's. A bridge is a block pair `(I, J)` across components with the upper
-/// bound `A_I B_J exp(−b_IJ/ε)` on its mass, where `b_IJ` is the block bound on reduced costs
-/// (`blocks::pair_bound` for the fits of `f, g`) and `A_I, B_J` the cluster masses. Kept are
+/// `(I, J)` is at least `e^−WEAK_LINK` of the smaller cluster's. A bridge is a block pair
+/// `(I, J)` across components with the upper bound `A_I B_J exp(−b_IJ/ε)` on its mass, where
+/// `b_IJ` is the block bound on reduced costs (`blocks::pair_bound` for the fits of `f, g`)
+/// and `A_I, B_J` the cluster masses. Kept are
 /// the pairs with `b_IJ ≤ b*_ab + BRIDGE_MARGIN · ε`, where `b*_ab` is the cheapest bound
 /// from component `a`'s sources to component `b`'s targets: every ordered pair of components
 /// gets its cheapest bridges, so mass can take any direction between them (bridges chosen
@@ -245,9 +246,10 @@ impl Lumped {
     /// source mass (one, the heaviest, held at 0 for the gauge), where `S = diag(P1) −
     /// P diag(1ᵀP)⁻¹ Pᵀ` is a Laplacian with weights `Σ_c P_ac P_bc / c_c` (its rows sum to
     /// zero), solved from the weights alone ([`grounded_laplacian_solve`]) so that flows of
-    /// `e^−80` next to flows of 1 are not lost to cancellation. The step `δu` is shortened to length `ln(1 + m)` when its largest entry
-    /// `m` exceeds 1 and halved until the dual objective rises (Armijo without a slope
-    /// factor: the objective is concave and `δu` its Newton direction).
+    /// `e^−80` next to flows of 1 are not lost to cancellation. The step `δu` is shortened
+    /// to length `ln(1 + m)` when its largest entry `m` exceeds 1 and halved until the dual
+    /// objective rises (Armijo without a slope factor: the objective is concave and `δu` its
+    /// Newton direction).
     pub(super) fn solve(&self) -> Option<Solved> {
         let k = self.components;
         let free: Vec<usize> = (0..k)

@@ -16,38 +16,40 @@
 //!    marginals are then those of the two clouds; what is left is the error
 //!    inside clusters, which fine updates remove quickly.
 //!
-//! If the scaling has not converged within [`SCALING_ITERATIONS`] updates, the
-//! kept block pairs cannot carry the cluster marginals: the potentials the
-//! support was built from are off by more than its width somewhere. On the
-//! benchmark pairs this happens after the coarse-to-fine jump, when the
+//! If the scaling has not converged within [`SCALING_ITERATIONS`] updates,
+//! the kept block pairs cannot carry the cluster marginals: the potentials
+//! the support was built from are off by more than its width somewhere. On
+//! the benchmark pairs this happens after the coarse-to-fine jump, when the
 //! support graph falls into components whose source and target masses differ
 //! (one blob grew between the images), joined by no block pair or only by
 //! weak ones (plan mass `e^−9` to `e^−80` of a cluster's, where the links
-//! inside components carry more than `e^−4.5`). Mass then has to cross a bottleneck, and the scaling's
-//! potentials drift apart per component without converging. Two fallbacks:
+//! inside components carry more than `e^−4.5`). Mass then has to cross a
+//! bottleneck, and the scaling's potentials drift apart per component without
+//! converging. Two fallbacks:
 //! 1. **Bridged** (`bridges`): the problem is lumped per component of the
 //!    graph of strong links (mass at least `e^−WEAK_LINK` of the smaller
 //!    cluster's), with bridges across components: block pairs outside the
-//!    support, each with the upper bound `A_I B_J e^{−b_IJ/ε}` on its mass from
-//!    the block bound `b_IJ` on reduced costs (see `blocks`), for every
+//!    support, each with the upper bound `A_I B_J e^{−b_IJ/ε}` on its mass
+//!    from the block bound `b_IJ` on reduced costs (see `blocks`), for every
 //!    ordered pair of components those up to `BRIDGE_MARGIN · ε` above the
-//!    cheapest bound between them. Newton's method on the small lumped problem gives one shift
-//!    per component (1–8 steps on the benchmark pairs); applied, it moves the
-//!    components' relative potentials so the bridges carry the imbalance.
-//!    Since a bridge's mass is over-estimated, the shift errs short of the
-//!    exact one, never past it.
-//! 2. **Clamped**, if Newton's method does not converge either: the
-//!    cluster scaling's last iterate, with the gauge `u + c, v − c` fixed by a
-//!    zero mean of `u` and each entry clamped to `±clamp` (the caller passes
-//!    the support's width in units of ε), is applied anyway: that moves the
-//!    clusters that lack mass towards the block pairs just outside the support.
+//!    cheapest bound between them. Newton's method on the small lumped
+//!    problem gives one shift per component (1–8 steps on the benchmark
+//!    pairs); applied, it moves the components' relative potentials so the
+//!    bridges carry the imbalance. Since a bridge's mass is over-estimated,
+//!    the shift errs short of the exact one, never past it.
+//! 2. **Clamped**, if Newton's method does not converge either: the cluster
+//!    scaling's last iterate, with the gauge `u + c, v − c` fixed by a zero
+//!    mean of `u` and each entry clamped to `±clamp` (the caller passes the
+//!    support's width in units of ε), is applied anyway: that moves the
+//!    clusters that lack mass towards the block pairs just outside the
+//!    support.
 //!
-//! Either way the caller rebuilds the support from the shifted potentials. (On
-//! seed 1 of the benchmark pair at n = 16384 with `jump_radii` 2, clamped corrections alone needed
-//! seven rebuilds in a row, the shift overshooting by ±30ε each time, 3.0 G
-//! pairs; one bridged correction: 2.2 G pairs. Seed 4's components are joined
-//! by one block pair of mass `e^−73` of a cluster's: 1.91 G pairs with one
-//! clamped correction, 1.66 G bridged.)
+//! Either way the caller rebuilds the support from the shifted potentials.
+//! (On seed 1 of the benchmark pair at n = 16384 with `jump_radii` 2, clamped
+//! corrections alone needed seven rebuilds in a row, the shift overshooting
+//! by ±30ε each time, 3.0 G pairs; one bridged correction: 2.2 G pairs. Seed
+//! 4's components are joined by one block pair of mass `e^−73` of a
+//! cluster's: 1.91 G pairs with one clamped correction, 1.66 G bridged.)
 //!
 //! Everything runs in a fixed order (the pass over fixed source blocks, the
 //! cluster scaling sequentially), so results do not depend on the thread count.
@@ -88,29 +90,18 @@ pub(super) fn correct(
     clamp: f64,
 ) -> Correction {
     let (log_a, log_b) = (cluster_log_masses(x), cluster_log_masses(y));
-    let mut scaling = scale(log_masses, lists, &log_a, &log_b, SCALING_ITERATIONS);
-    let mut outcome = Correction::Applied {
-        updates: scaling.updates,
-    };
-    if !scaling.converged
-        && let Some(lumped) = Lumped::new(x, y, lists, log_masses, f, g, eps, (&log_a, &log_b))
-        && let Some(solved) = lumped.solve()
+    let scaling = scale(log_masses, lists, &log_a, &log_b, SCALING_ITERATIONS);
+    let (u, v, outcome) = if scaling.converged {
+        let updates = scaling.updates;
+        (scaling.u, scaling.v, Correction::Applied { updates })
+    } else if let Some(solved) =
+        Lumped::new(x, y, lists, log_masses, f, g, eps, (&log_a, &log_b)).and_then(|l| l.solve())
     {
-        outcome = Correction::Bridged {
-            updates: solved.steps,
-        };
-        scaling = Scaling {
-            u: solved.u,
-            v: solved.v,
-            updates: solved.steps,
-            converged: true,
-        };
-    }
-    let (u, v) = if scaling.converged {
-        (scaling.u, scaling.v)
+        let updates = solved.steps;
+        (solved.u, solved.v, Correction::Bridged { updates })
     } else {
-        outcome = Correction::Clamped;
-        bounded(scaling, clamp)
+        let (u, v) = bounded(scaling, clamp);
+        (u, v, Correction::Clamped)
     };
     shift(f, &x.ranges, &u, eps);
     shift(g, &y.ranges, &v, eps);
@@ -143,7 +134,7 @@ pub(super) enum Correction {
 }
 
 /// `log Σ_{i∈I} w_i` per cluster.
-pub(super) fn cluster_log_masses(level: &Level) -> Vec<f64> {
+fn cluster_log_masses(level: &Level) -> Vec<f64> {
     level
         .ranges
         .iter()
@@ -213,8 +204,8 @@ impl ClusterMatrix {
 ///
 /// Sums are taken relative to `max p` so they neither overflow nor (in practice) underflow;
 /// a list whose sum vanishes keeps its old value and is counted (returned): its
-/// marginal is not met, however small the change of the others. Sequential: with a few hundred to a few
-/// thousand clusters, rayon's fork–join per half-update cost more than the sums (n = 4096:
+/// marginal is not met, however small the change of the others. Sequential: with a few
+/// hundred to a few thousand clusters, rayon's fork–join per half-update cost more than the sums (n = 4096:
 /// 0.14 s of corrections per solve in parallel, 0.055 s sequentially).
 fn half_update(
     lists: &[Vec<(u32, f64)>],
