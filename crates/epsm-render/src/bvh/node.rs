@@ -334,8 +334,8 @@ impl BoxTest for Avx {
     #[inline(always)]
     #[allow(unsafe_code)]
     fn packet_hit(self, packet: &TrianglePacket, ray: &TraceRay, lanes: u32) -> Option<PacketHit> {
-        // SAFETY: as `hits`: `intersect_8` requires only AVX.
-        unsafe { packet.intersect_8(ray, lanes) }
+        // SAFETY: as `hits`: `intersect_8_outlined` requires only AVX.
+        unsafe { packet.intersect_8_outlined(ray, lanes) }
     }
 }
 

@@ -21,7 +21,7 @@
 //!
 //! No parameters.
 
-use glam::Vec3A;
+use glam::{Vec3A, Vec4};
 use obvhs::aabb::Aabb;
 
 /// Per-ray constants of the watertight test.
@@ -46,15 +46,16 @@ impl RayShear {
         let x_largest = (a.x >= a.y) & (a.x >= a.z);
         let y_ge_z = a.y >= a.z;
         let kz = usize::from(!x_largest) + usize::from(!x_largest & !y_ge_z);
-        let d = dir.to_array();
-        let dz = d[kz];
-        // Clamped (a no-op) so that the loads below need no bounds checks.
-        let [kx, ky] = AXES_ACROSS[2 * kz + usize::from(dz < 0.0)].map(|k| k.min(2));
+        // Four components, indexed by `k & 3` (a no-op for `k < 3`), so the
+        // loads below need no bounds checks.
+        let d = Vec4::from((dir, 0.0)).to_array();
+        let dz = d[kz & 3];
+        let [kx, ky] = AXES_ACROSS[2 * kz + usize::from(dz < 0.0)];
         // `S = dir[k]·sz`, as the paper rounds it.
         let sz = 1.0 / dz;
         Self {
             axes: [kx, ky, kz],
-            kz_col: [-(d[kx] * sz), -(d[ky] * sz), sz],
+            kz_col: [-(d[kx & 3] * sz), -(d[ky & 3] * sz), sz],
         }
     }
 }

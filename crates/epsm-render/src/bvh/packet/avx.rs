@@ -24,10 +24,9 @@ impl TrianglePacket {
     /// so the same hit (the rare cases of the module docs are passed to
     /// [`TrianglePacket::intersect_4x2`]).
     ///
-    /// Not inlined into the walk (LLVM declines, and forcing it cost 1 %
-    /// more instructions per sample on `scenes/caustic-box.toml`: the walk's
-    /// registers spill). It calls nothing on its common paths, so it saves
-    /// no registers and needs no stack frame of its own.
+    /// It calls nothing on its common paths, so it saves no registers and
+    /// needs no stack frame. The walks call it through
+    /// [`TrianglePacket::intersect_8_outlined`].
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx")]
     #[inline]
@@ -162,6 +161,26 @@ impl TrianglePacket {
                 b2: b2[lane],
             })
         }
+    }
+
+    /// [`TrianglePacket::intersect_8`] out of line: the walks' packet test.
+    /// Not a `#[target_feature]` function: rustc does not keep
+    /// `#[inline(never)]` on those, and LLVM inlined `intersect_8` into the
+    /// closest-hit walks of the AVX2 tile loop, and with some changes to the
+    /// ray set-up also into the occlusion walks, for 5 M to 31 M more
+    /// instructions in the spp-8 run of `scenes/caustic-box.toml` than this
+    /// call (1 707.4 M); forcing it inline through a plain
+    /// `#[inline(always)]` function gave 1 745.8 M.
+    ///
+    /// # Safety
+    /// The CPU must have AVX.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(never)]
+    #[allow(unsafe_code)]
+    pub unsafe fn intersect_8_outlined(&self, ray: &TraceRay, lanes: u32) -> Option<PacketHit> {
+        // SAFETY: the CPU has AVX (this function's contract), all that
+        // `intersect_8` requires.
+        unsafe { self.intersect_8(ray, lanes) }
     }
 
     /// [`TrianglePacket::intersect_4x2`], out of line for the rare cases of
