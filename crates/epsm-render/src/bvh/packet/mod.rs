@@ -80,9 +80,10 @@ struct Sheared {
 
 impl TrianglePacket {
     /// The packet of `triangles` (one to [`LANES`]) in lane order, with
-    /// their `ids` and child bits `children` (as many).
+    /// their `ids` and child bits `children` (as many, one bit set in each).
     pub fn new(triangles: &[PackedTriangle], ids: &[u32], children: &[u8]) -> Self {
         debug_assert!((1..=LANES).contains(&triangles.len()));
+        debug_assert!(children.iter().all(|c| c.count_ones() == 1));
         debug_assert_eq!(triangles.len(), ids.len());
         debug_assert_eq!(triangles.len(), children.len());
         let mut lane_children = [0u8; LANES];
@@ -109,12 +110,14 @@ impl TrianglePacket {
     #[inline(always)]
     pub fn lanes_of(&self, children: u32) -> u32 {
         const BYTES: u64 = 0x0101_0101_0101_0101;
-        // Per byte: nonzero → bit 7 set (no carries between bytes).
+        // Per byte: nonzero → bit 7 set. A byte holds at most one child bit,
+        // at most 0x80, so adding 0x7f carries into no other byte.
         let x = self.children & (u64::from(children) * BYTES);
-        let high = (((x & (0x7f * BYTES)) + 0x7f * BYTES) | x) & (0x80 * BYTES);
-        // Bit 8i + 7 to bit 56 + i by one multiply (the shifted copies land
-        // on distinct bits, so nothing carries).
-        ((high >> 7).wrapping_mul(0x0102_0408_1020_4080) >> 56) as u32
+        let high = (x + 0x7f * BYTES) & (0x80 * BYTES);
+        // Bit 8i + 7 to bit 56 + i by one multiply (by the sum of 2^(7j):
+        // copy j = 7 − i of bit 8i + 7 lands there, and the shifted copies
+        // land on distinct bits, so nothing carries).
+        (high.wrapping_mul(0x0002_0408_1020_4081) >> 56) as u32
     }
 
     /// The id of the triangle in `lane`.
