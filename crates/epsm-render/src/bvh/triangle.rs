@@ -27,8 +27,9 @@ use obvhs::aabb::Aabb;
 /// Per-ray constants of the watertight test.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct RayShear {
-    /// The axes `[kx, ky, kz]`.
-    pub axes: [usize; 3],
+    /// The axes `[kx, ky, kz]`, each below 3 (set only by
+    /// [`RayShear::new`]; the AVX packet test indexes by them unchecked).
+    axes: [usize; 3],
     /// `(−Sx, −Sy, Sz)`: a vertex `v` relative to the origin shears to
     /// `(v[kx] + (−Sx)·v[kz], v[ky] + (−Sy)·v[kz], Sz·v[kz])`.
     pub kz_col: [f32; 3],
@@ -57,6 +58,14 @@ impl RayShear {
             axes: [kx, ky, kz],
             kz_col: [-(d[kx & 3] * sz), -(d[ky & 3] * sz), sz],
         }
+    }
+}
+
+impl RayShear {
+    /// The axes `[kx, ky, kz]`, each below 3.
+    #[inline(always)]
+    pub fn axes(&self) -> [usize; 3] {
+        self.axes
     }
 }
 
@@ -115,7 +124,7 @@ impl PackedTriangle {
     ) -> Option<TriangleHit> {
         // Vertices relative to the origin, sheared: (x, y) in the plane
         // across the ray, z along it.
-        let [kx, ky, kz] = shear.axes;
+        let [kx, ky, kz] = shear.axes();
         let [nsx, nsy, sz] = shear.kz_col;
         let [a, b, c] = self.p.map(|p| {
             let r = (p - origin).to_array();

@@ -55,18 +55,21 @@ impl TrianglePacket {
                 _mm256_sub_ps(_mm256_mul_ps($p[0], $q[1]), _mm256_mul_ps($p[1], $q[0]))
             };
         }
-        let [kx, ky, kz] = ray.shear.axes.map(|k| k.min(2));
+        let [kx, ky, kz] = ray.shear.axes();
+        debug_assert!(kx < 3 && ky < 3 && kz < 3);
         let o = ray.origin.to_array();
         let [nsx, nsy, sz] = &ray.shear.kz_col;
         // SAFETY: the aligned loads and stores access `Lanes8`s, eight `f32`
         // aligned to 32 bytes, exactly what they read and write; the
-        // broadcasts read one `f32` each through a reference; AVX is enabled
-        // on this function.
+        // broadcasts read one `f32` each through a reference; the unchecked
+        // indices are the ray's axes, below 3 by `RayShear::new` (the only
+        // code that sets them), into arrays of 3; AVX is enabled on this
+        // function.
         unsafe {
             let (ox, oy, oz) = (
-                _mm256_set1_ps(o[kx]),
-                _mm256_set1_ps(o[ky]),
-                _mm256_set1_ps(o[kz]),
+                _mm256_broadcast_ss(o.get_unchecked(kx)),
+                _mm256_broadcast_ss(o.get_unchecked(ky)),
+                _mm256_broadcast_ss(o.get_unchecked(kz)),
             );
             let (nsx, nsy, sz) = (
                 _mm256_broadcast_ss(nsx),
@@ -76,10 +79,11 @@ impl TrianglePacket {
             // `(x, y, z)` of a vertex, sheared as in `intersect_half`.
             macro_rules! sheared {
                 ($p:expr) => {{
-                    let z = _mm256_sub_ps(load!($p[kz]), oz);
+                    let [x, y, z] = [kx, ky, kz].map(|k| load!($p.get_unchecked(k)));
+                    let z = _mm256_sub_ps(z, oz);
                     [
-                        _mm256_add_ps(_mm256_sub_ps(load!($p[kx]), ox), _mm256_mul_ps(nsx, z)),
-                        _mm256_add_ps(_mm256_sub_ps(load!($p[ky]), oy), _mm256_mul_ps(nsy, z)),
+                        _mm256_add_ps(_mm256_sub_ps(x, ox), _mm256_mul_ps(nsx, z)),
+                        _mm256_add_ps(_mm256_sub_ps(y, oy), _mm256_mul_ps(nsy, z)),
                         _mm256_mul_ps(sz, z),
                     ]
                 }};

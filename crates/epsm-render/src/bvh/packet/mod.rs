@@ -158,7 +158,7 @@ impl TrianglePacket {
     ) -> Option<PacketHit> {
         let (shear, t_min) = (&ray.shear, ray.t_min);
         // Clamped (a no-op) so that the loads below need no bounds checks.
-        let [kx, ky, kz] = shear.axes.map(|k| k.min(2));
+        let [kx, ky, kz] = shear.axes().map(|k| k.min(2));
         let range = HALF * (half & 1)..HALF * (half & 1) + HALF;
         let load = |p: &Lanes8| Vec4::from_slice(&p.0[range.clone()]);
         let o = ray.origin.to_array();
