@@ -40,7 +40,8 @@ pub(crate) fn walk(
     if bvh.nodes.is_empty() {
         return;
     }
-    let oct = ray.oct_inv4 & 0xff;
+    let oct_inv4 = ray.oct_inv4();
+    let oct = oct_inv4 & 0xff;
     let mut stack = [MaybeUninit::<(u32, u32)>::uninit(); STACK];
     let mut depth = 0usize;
     // (index of the first inner child, hit inner children << 24 | inner mask):
@@ -67,7 +68,7 @@ pub(crate) fn walk(
             let slot = (offset - 24) ^ oct;
             let relative = (hits_imask & !(u32::MAX << slot)).count_ones();
             let node = &bvh.nodes[(group.0 + relative) as usize];
-            let hit_mask = node.intersect(ray, boxes);
+            let hit_mask = node.intersect(ray, oct_inv4, boxes);
             group = (
                 node.child_base_idx,
                 (hit_mask & INNER_HITS) | node.imask as u32,
