@@ -135,6 +135,12 @@ impl FlatBvh {
                 inner,
             });
         }
+        // The walk indexes nodes by these unchecked.
+        assert!(
+            nodes
+                .iter()
+                .all(|n| n.children.iter().all(|&c| (c as usize) < nodes.len()))
+        );
         Self {
             nodes,
             packets,
@@ -189,7 +195,10 @@ impl FlatBvh {
         let mut depth = 0usize;
         let mut node = 0usize;
         loop {
-            let n = &self.nodes[node];
+            // SAFETY: `node` is the root (`nodes` is not empty) or a child
+            // index of a node, below `nodes.len()` (asserted by
+            // `FlatBvh::new`; nothing changes the nodes after).
+            let n = unsafe { self.nodes.get_unchecked(node) };
             let hits = boxes.hits(&n.boxes, ray);
             // Leaf children first: their hits lower `t_max`, which culls the
             // inner children below.
@@ -198,7 +207,13 @@ impl FlatBvh {
             let node_packets = if leaves == 0 {
                 &[][..]
             } else {
-                &self.packets[first..first + n.packet_count as usize]
+                // SAFETY: `FlatBvh::new` gives each node the run of packets
+                // it pushes right then (`first_packet` and `packet_count`),
+                // inside `packets`, and nothing changes them after.
+                unsafe {
+                    self.packets
+                        .get_unchecked(first..first + n.packet_count as usize)
+                }
             };
             for packet in node_packets {
                 let lanes = packet.lanes_of(leaves);
