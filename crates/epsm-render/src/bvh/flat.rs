@@ -242,7 +242,7 @@ impl FlatBvh {
                 let child = inner.trailing_zeros() as usize;
                 inner &= inner - 1;
                 let entry = hits.entry.0[child];
-                if entry > ray.t_max || depth == STACK {
+                if entry > ray.t_max || depth >= STACK {
                     continue;
                 }
                 let mut at = depth;
