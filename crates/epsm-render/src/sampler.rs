@@ -111,7 +111,6 @@ impl PixelKeys {
             keys: self,
             sample_key: mix64(self.key ^ u64::from(sample).wrapping_mul(SAMPLE_STEP)),
             sample,
-            dim: 0,
         }
     }
 
@@ -135,7 +134,11 @@ impl PixelKeys {
     }
 }
 
-/// The random stream of one pixel sample.
+/// The random stream of one pixel sample: number `d` of the stream is
+/// [`Self::get_1d`]`(d)`, a pure function of `(seed, pixel, sample, d)`, so a
+/// caller draws each number by its dimension (paths give each bounce a fixed
+/// block of dimensions, so that a path's numbers do not depend on earlier
+/// branches) and the stream has no position to keep.
 #[derive(Clone, Copy, Debug)]
 pub struct PixelSampler<'a> {
     /// The pixel's sample-independent keys ([`PixelKeys`]).
@@ -144,22 +147,12 @@ pub struct PixelSampler<'a> {
     /// stratified ones.
     sample_key: u64,
     sample: u32,
-    dim: u32,
 }
 
 impl PixelSampler<'_> {
-    /// Jumps to dimension `dim` (paths give each bounce a fixed block of
-    /// dimensions so that a path's numbers do not depend on earlier branches).
-    #[inline]
-    pub fn set_dimension(&mut self, dim: u32) {
-        self.dim = dim;
-    }
-
-    /// The next number in `[0, 1)`.
+    /// The number of dimension `dim`, in `[0, 1)`.
     #[inline(always)]
-    pub fn next_1d(&mut self) -> f32 {
-        let dim = self.dim;
-        self.dim += 1;
+    pub fn get_1d(&self, dim: u32) -> f32 {
         let keys = self.keys;
         let Some(scramble) = keys.strata.get(dim as usize) else {
             return to_unit(weyl_mix(self.sample_key, dim));
@@ -169,11 +162,10 @@ impl PixelSampler<'_> {
         ((stratum as f32 + jitter) * keys.inv_count).min(ONE_MINUS_EPSILON)
     }
 
-    /// The next two numbers in `[0, 1)²`.
-    #[inline]
-    pub fn next_2d(&mut self) -> Vec2 {
-        let x = self.next_1d();
-        Vec2::new(x, self.next_1d())
+    /// The numbers of dimensions `dim` and `dim + 1`, in `[0, 1)²`.
+    #[inline(always)]
+    pub fn get_2d(&self, dim: u32) -> Vec2 {
+        Vec2::new(self.get_1d(dim), self.get_1d(dim + 1))
     }
 }
 
@@ -251,9 +243,7 @@ mod tests {
             for dim in 0..STRATIFIED_DIMENSIONS {
                 let mut strata = vec![0u32; spp as usize];
                 for s in 0..spp {
-                    let mut r = keys.sampler(s);
-                    r.set_dimension(dim);
-                    let x = r.next_1d();
+                    let x = keys.sampler(s).get_1d(dim);
                     assert!((0.0..1.0).contains(&x));
                     strata[(x * spp as f32) as usize] += 1;
                 }
@@ -322,9 +312,7 @@ mod tests {
             let n = 256 * 400;
             for i in 0..n {
                 let keys = PixelKeys::new(5, i / 16, 16);
-                let mut r = keys.sampler(i % 16);
-                r.set_dimension(first);
-                let v = r.next_2d();
+                let v = keys.sampler(i % 16).get_2d(first);
                 cells[(v.x * 16.0) as usize * 16 + (v.y * 16.0) as usize] += 1;
             }
             let expected = n as f64 / 256.0;
@@ -341,9 +329,7 @@ mod tests {
     fn streams_are_pure_functions_of_their_key_and_differ_between_keys() {
         let stream = |seed, pixel, sample, dim| {
             let keys = PixelKeys::new(seed, pixel, 16);
-            let mut r = keys.sampler(sample);
-            r.set_dimension(dim);
-            r.next_2d()
+            keys.sampler(sample).get_2d(dim)
         };
         for dim in [0, 30] {
             let a = stream(1, 2, 3, dim);
@@ -363,9 +349,7 @@ mod tests {
             let (mut sx, mut sy, mut sxy, mut sxx, mut syy) = (0.0f64, 0.0, 0.0, 0.0, 0.0);
             for px in 0..n {
                 let keys = PixelKeys::new(3, px, 4);
-                let mut r = keys.sampler(px % 4);
-                r.set_dimension(dim);
-                let v = r.next_2d();
+                let v = keys.sampler(px % 4).get_2d(dim);
                 let (x, y) = (v.x as f64, v.y as f64);
                 sx += x;
                 sy += y;

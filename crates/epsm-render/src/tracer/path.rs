@@ -3,7 +3,10 @@
 
 use glam::Vec3;
 
-use super::{DIMS_PER_BOUNCE, RenderOptions, SHADOW_EPS, TraceCounters};
+use super::{
+    DIM_DIRECTION, DIM_FIRST_BOUNCE, DIM_LIGHT, DIM_LIGHT_SELECT, DIM_LOBE, DIM_ROULETTE,
+    DIMS_PER_BOUNCE, RenderOptions, SHADOW_EPS, TraceCounters,
+};
 use crate::bvh::BoxTest;
 use crate::frame::Frame;
 use crate::hit::SurfacePoint;
@@ -38,7 +41,7 @@ pub(super) fn trace_path(
     scene: &Scene,
     opts: &RenderOptions,
     mut ray: Ray,
-    sampler: &mut PixelSampler<'_>,
+    sampler: &PixelSampler<'_>,
     mut rec: Option<&mut Recording<'_>>,
     counters: &mut TraceCounters,
     boxes: impl BoxTest,
@@ -54,8 +57,7 @@ pub(super) fn trace_path(
     let mut prev: Option<(Vec3, f32)> = None;
 
     for depth in 0..opts.max_depth {
-        let dims = 2 + depth * DIMS_PER_BOUNCE;
-        sampler.set_dimension(dims);
+        let dims = DIM_FIRST_BOUNCE + depth * DIMS_PER_BOUNCE;
         counters.rays += 1;
 
         // Find the next vertex; rays that leave see the background.
@@ -108,16 +110,17 @@ pub(super) fn trace_path(
             wi_world,
             material,
         };
-        let nee = next_event(scene, &shading, beta, sampler, record_at, counters, boxes);
+        let nee = next_event(
+            scene, &shading, beta, sampler, dims, record_at, counters, boxes,
+        );
         contribution += nee.contribution;
         let connection = nee.connection;
         radiance += contribution;
 
-        // Sample the BSDF to continue (dimensions 3–5 of the bounce's block,
-        // whether or not next-event estimation drew its three).
-        sampler.set_dimension(dims + 3);
-        let u_lobe = sampler.next_1d();
-        let u_dir = sampler.next_2d();
+        // Sample the BSDF to continue (whether or not next-event estimation
+        // drew its three numbers).
+        let u_lobe = sampler.get_1d(dims + DIM_LOBE);
+        let u_dir = sampler.get_2d(dims + DIM_DIRECTION);
         let sample = material.sample(wi, sp.uv, u_lobe, u_dir);
         let mut next = None;
         if let Some(bs) = sample {
@@ -177,7 +180,7 @@ pub(super) fn trace_path(
         // Russian roulette on the throughput with radiance scaling undone.
         if depth + 1 >= opts.rr_depth {
             let q = (beta.max_element() * eta_scale).min(0.95);
-            if q <= 0.0 || sampler.next_1d() >= q {
+            if q <= 0.0 || sampler.get_1d(dims + DIM_ROULETTE) >= q {
                 break;
             }
             beta /= q;
@@ -209,14 +212,17 @@ struct NextEvent {
 }
 
 /// Samples a light, evaluates the BSDF toward it, MIS-weights against BSDF
-/// sampling and traces the shadow ray (box tests by `boxes`). Consumes three
-/// random numbers, none at a delta vertex.
+/// sampling and traces the shadow ray (box tests by `boxes`). Draws three
+/// random numbers of the bounce's block starting at dimension `dims`, none at
+/// a delta vertex.
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 fn next_event(
     scene: &Scene,
     at: &Shading<'_>,
     beta: Vec3,
-    sampler: &mut PixelSampler<'_>,
+    sampler: &PixelSampler<'_>,
+    dims: u32,
     record_at: Option<u32>,
     counters: &mut TraceCounters,
     boxes: impl BoxTest,
@@ -228,8 +234,8 @@ fn next_event(
     if at.material.is_delta() {
         return out;
     }
-    let u_select = sampler.next_1d();
-    let u_light = sampler.next_2d();
+    let u_select = sampler.get_1d(dims + DIM_LIGHT_SELECT);
+    let u_light = sampler.get_2d(dims + DIM_LIGHT);
     let Some(ls) = scene.lights().sample(at.sp.p, u_select, u_light) else {
         return out;
     };
