@@ -95,7 +95,7 @@ pub(super) fn trace_path(
         }
 
         let frame = Frame::from_normal(sp.ns);
-        let wi = frame.to_local(wi_world);
+        let wi = material.to_local(&frame, wi_world);
         let kind = material.vertex_kind();
 
         // Next-event estimation toward a light.
@@ -196,7 +196,8 @@ pub(super) fn trace_path(
 struct Shading<'a> {
     sp: &'a SurfacePoint,
     frame: &'a Frame,
-    /// Direction toward the previous vertex, local frame.
+    /// Direction toward the previous vertex, local frame (as far as the
+    /// material reads it: [`Material::to_local`]).
     wi: Vec3,
     /// The same, world space.
     wi_world: Vec3,
@@ -239,7 +240,7 @@ fn next_event(
     let Some(ls) = scene.lights().sample(at.sp.p, u_select, u_light) else {
         return out;
     };
-    let wo = at.frame.to_local(ls.wo);
+    let wo = at.material.to_local(at.frame, ls.wo);
     let f = at.material.eval(at.wi, wo, at.sp.uv);
     let same_side = ls.wo.dot(at.sp.ng) * at.wi_world.dot(at.sp.ng) > 0.0;
     if f == Vec3::ZERO || !same_side || ls.pdf <= 0.0 {
