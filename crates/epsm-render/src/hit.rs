@@ -131,12 +131,19 @@ pub(crate) fn surface_point(
 /// The texture coordinates of `triangle` of `mesh` at `(b1, b2)`: the
 /// interpolated `uvs`, or `(b1, b2)` without them.
 #[inline(always)]
-pub(crate) fn texture_uv(mesh: &Mesh, triangle: u32, b1: f32, b2: f32) -> Vec2 {
+fn texture_uv(mesh: &Mesh, triangle: u32, b1: f32, b2: f32) -> Vec2 {
     if mesh.uvs.is_empty() {
         return Vec2::new(b1, b2);
     }
-    let [i0, i1, i2] = mesh.indices[triangle as usize].map(|i| i as usize);
-    (1.0 - b1 - b2) * mesh.uvs[i0] + b1 * mesh.uvs[i1] + b2 * mesh.uvs[i2]
+    let uvs = mesh.indices[triangle as usize].map(|i| mesh.uvs[i as usize]);
+    interpolate_uv(uvs, b1, b2)
+}
+
+/// Texture coordinates `uvs` of a triangle's three vertices interpolated at
+/// `(b1, b2)`.
+#[inline(always)]
+pub(crate) fn interpolate_uv([uv0, uv1, uv2]: [Vec2; 3], b1: f32, b2: f32) -> Vec2 {
+    (1.0 - b1 - b2) * uv0 + b1 * uv1 + b2 * uv2
 }
 
 /// `normalize(e1 × e2)` in `f32`, or in `f64` when the cross product

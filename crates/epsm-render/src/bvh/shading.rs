@@ -16,7 +16,7 @@
 
 use glam::{DMat3, DVec3, Vec2, Vec3};
 
-use crate::hit::SurfacePoint;
+use crate::hit::{self, SurfacePoint};
 use crate::scene::Object;
 
 /// How a static triangle's shading normal is found.
@@ -44,8 +44,10 @@ pub(crate) struct ShadingTriangle {
     /// normal).
     ng: Vec3,
     normals: Normals,
-    /// Whether the mesh has texture coordinates (looked up at the hit).
-    pub textured: bool,
+    /// The three vertices' texture coordinates, when the mesh has them
+    /// (interpolated at the hit by [`hit::interpolate_uv`]; without them the
+    /// texture coordinates are `(b1, b2)`).
+    uvs: Option<[Vec2; 3]>,
 }
 
 impl ShadingTriangle {
@@ -90,13 +92,14 @@ impl ShadingTriangle {
             e2: p2 - p0,
             ng,
             normals,
-            textured: !mesh.uvs.is_empty(),
+            uvs: (!mesh.uvs.is_empty())
+                .then(|| mesh.indices[triangle as usize].map(|i| mesh.uvs[i as usize])),
         }
     }
 
-    /// The shading point at `(b1, b2)`, with `uv` as given.
+    /// The shading point at `(b1, b2)`.
     #[inline(always)]
-    pub fn point(&self, b1: f32, b2: f32, uv: Vec2) -> SurfacePoint {
+    pub fn point(&self, b1: f32, b2: f32) -> SurfacePoint {
         let p = self.p0 + b1 * self.e1 + b2 * self.e2;
         let (ng, ns) = match self.normals {
             Normals::Geometric => (self.ng, self.ng),
@@ -110,6 +113,10 @@ impl ShadingTriangle {
                 };
                 (ng, ns)
             }
+        };
+        let uv = match self.uvs {
+            Some(uvs) => hit::interpolate_uv(uvs, b1, b2),
+            None => Vec2::new(b1, b2),
         };
         SurfacePoint { p, ng, ns, uv }
     }
