@@ -79,11 +79,13 @@ pub(super) fn trace_path(
         // Camera and continuation rays are unit (sampled directions mapped by
         // an orthonormal frame): no renormalisation.
         let wi_world = -ray.dir;
+        // Its cosine with the geometric normal, for the side tests.
+        let wi_ng = wi_world.dot(sp.ng);
         let mut contribution = Vec3::ZERO;
 
         // Emission hit by BSDF sampling (front face only).
         if let Some(le) = object.emission
-            && sp.ng.dot(wi_world) > 0.0
+            && wi_ng > 0.0
         {
             let w = prev.map_or(1.0, |(p_prev, pdf)| {
                 mis(
@@ -107,7 +109,7 @@ pub(super) fn trace_path(
             sp: &sp,
             frame: &frame,
             wi,
-            wi_world,
+            wi_ng,
             material,
         };
         let nee = next_event(
@@ -125,10 +127,11 @@ pub(super) fn trace_path(
         let mut next = None;
         if let Some(bs) = sample {
             let wo_world = frame.to_world(bs.wo);
+            let wo_ng = wo_world.dot(sp.ng);
             let reflect = !bs.lobe.is_transmission();
-            let same_side = wo_world.dot(sp.ng) * wi_world.dot(sp.ng) > 0.0;
+            let same_side = wo_ng * wi_ng > 0.0;
             if same_side == reflect {
-                next = Some((bs, wo_world));
+                next = Some((bs, wo_world, wo_ng));
             } else {
                 counters.leaks += 1;
             }
@@ -141,7 +144,7 @@ pub(super) fn trace_path(
                 b1: hit.b1,
                 b2: hit.b2,
             };
-            let (lobe, eta, m) = next.map_or((None, 1.0, sp.ns), |(bs, _)| {
+            let (lobe, eta, m) = next.map_or((None, 1.0, sp.ns), |(bs, _, _)| {
                 (Some(bs.lobe), bs.eta, frame.to_world(bs.m))
             });
             r.rec.vertices.push(VertexRecord {
@@ -164,17 +167,15 @@ pub(super) fn trace_path(
             };
         }
 
-        let Some((bs, wo_world)) = next else { break };
+        let Some((bs, wo_world, wo_ng)) = next else {
+            break;
+        };
         beta *= bs.weight;
         if bs.lobe.is_transmission() {
             eta_scale *= bs.eta * bs.eta;
         }
         prev = Some((sp.p, bs.pdf)).filter(|_| !bs.lobe.is_delta());
-        let side = if wo_world.dot(sp.ng) >= 0.0 {
-            sp.ng
-        } else {
-            -sp.ng
-        };
+        let side = if wo_ng >= 0.0 { sp.ng } else { -sp.ng };
         ray = Ray::new(offset_origin(sp.p, side), wo_world);
 
         // Russian roulette on the throughput with radiance scaling undone.
@@ -199,8 +200,8 @@ struct Shading<'a> {
     /// Direction toward the previous vertex, local frame (as far as the
     /// material reads it: [`Material::to_local`]).
     wi: Vec3,
-    /// The same, world space.
-    wi_world: Vec3,
+    /// `wi · ng` in world space: its cosine with the geometric normal.
+    wi_ng: f32,
     material: &'a Material,
 }
 
@@ -240,7 +241,8 @@ fn next_event(
     let Some(ls) = scene.lights().sample(at.sp.p, u_select, u_light) else {
         return out;
     };
-    let same_side = ls.wo.dot(at.sp.ng) * at.wi_world.dot(at.sp.ng) > 0.0;
+    let wo_ng = ls.wo.dot(at.sp.ng);
+    let same_side = wo_ng * at.wi_ng > 0.0;
     if !same_side || ls.pdf <= 0.0 {
         return out;
     }
@@ -252,7 +254,7 @@ fn next_event(
     }
     let w = if ls.delta { 1.0 } else { mis(ls.pdf, bsdf.pdf) };
     let unoccluded = beta * f * ls.radiance * (w / ls.pdf);
-    let shadow = shadow_ray(at.sp, ls.wo, ls.position, ls.dist);
+    let shadow = shadow_ray(at.sp, ls.wo, wo_ng, ls.position, ls.dist);
     counters.shadow_rays += 1;
     let blocked = scene.accel().occluded_with(&shadow, boxes);
     if !blocked {
@@ -271,9 +273,9 @@ fn next_event(
 }
 
 /// The shadow ray from surface point `sp` toward a light point `y` (or along
-/// `wo` for the background when `dist` is infinite).
-fn shadow_ray(sp: &SurfacePoint, wo: Vec3, y: Vec3, dist: f32) -> Ray {
-    let side = if wo.dot(sp.ng) >= 0.0 { sp.ng } else { -sp.ng };
+/// `wo` for the background when `dist` is infinite); `wo_ng = wo · ng`.
+fn shadow_ray(sp: &SurfacePoint, wo: Vec3, wo_ng: f32, y: Vec3, dist: f32) -> Ray {
+    let side = if wo_ng >= 0.0 { sp.ng } else { -sp.ng };
     let origin = offset_origin(sp.p, side);
     if dist.is_finite() {
         Ray {
