@@ -192,7 +192,24 @@ impl PixelSampler<'_> {
     /// The number of dimension `dim`, in `[0, 1)`.
     #[inline(always)]
     pub fn get_1d(&self, dim: u32) -> f32 {
-        let jitter = to_unit(weyl_mix(self.sample_key, dim));
+        self.number(dim, weyl(self.sample_key, dim))
+    }
+
+    /// The numbers of dimensions `first + offset` ([`Block`]), e.g. one
+    /// bounce's block.
+    #[inline(always)]
+    pub fn block(&self, first: u32) -> Block<'_> {
+        Block {
+            sampler: self,
+            first,
+            weyl: weyl(self.sample_key, first),
+        }
+    }
+
+    /// The number of dimension `dim` whose Weyl step is `x`.
+    #[inline(always)]
+    fn number(&self, dim: u32, x: u64) -> f32 {
+        let jitter = to_unit(mix_weyl(x));
         if dim >= STRATIFIED_DIMENSIONS {
             return jitter;
         }
@@ -204,6 +221,35 @@ impl PixelSampler<'_> {
     #[inline(always)]
     pub fn get_2d(&self, dim: u32) -> Vec2 {
         Vec2::new(self.get_1d(dim), self.get_1d(dim + 1))
+    }
+}
+
+/// The numbers of a sample's dimensions `first + offset`
+/// ([`PixelSampler::block`]): the same as [`PixelSampler::get_1d`]`(first +
+/// offset)`, with the Weyl step of `first` computed once, so each number adds
+/// the constant `offset·φ` instead of multiplying.
+#[derive(Clone, Copy, Debug)]
+pub struct Block<'a> {
+    sampler: &'a PixelSampler<'a>,
+    first: u32,
+    /// The Weyl step of dimension `first`.
+    weyl: u64,
+}
+
+impl Block<'_> {
+    /// The number of dimension `first + offset`, in `[0, 1)`.
+    #[inline(always)]
+    pub fn get_1d(&self, offset: u32) -> f32 {
+        let x = self
+            .weyl
+            .wrapping_add(u64::from(offset).wrapping_mul(GOLDEN));
+        self.sampler.number(self.first + offset, x)
+    }
+
+    /// The numbers of dimensions `first + offset` and `first + offset + 1`.
+    #[inline(always)]
+    pub fn get_2d(&self, offset: u32) -> Vec2 {
+        Vec2::new(self.get_1d(offset), self.get_1d(offset + 1))
     }
 }
 
@@ -236,12 +282,17 @@ const SAMPLE_STEP: u64 = 0xD1B5_4A32_D192_ED03;
 /// The golden-ratio Weyl step between unstratified dimensions.
 const GOLDEN: u64 = 0x9E37_79B9_7F4A_7C15;
 
-/// 32 well-mixed bits of dimension `dim` from a per-sample key: one
-/// xorshift–multiply of the Weyl step `key + (dim + 1)·φ`, high half of the
-/// product (it depends on every bit of the multiplicand).
-#[inline]
-fn weyl_mix(key: u64, dim: u32) -> u32 {
-    let x = key.wrapping_add(u64::from(dim + 1).wrapping_mul(GOLDEN));
+/// The Weyl step `key + (dim + 1)·φ` of dimension `dim` from a per-sample
+/// key (wrapping, so steps of dimensions `d` and `d + k` differ by `k·φ`).
+#[inline(always)]
+fn weyl(key: u64, dim: u32) -> u64 {
+    key.wrapping_add(u64::from(dim + 1).wrapping_mul(GOLDEN))
+}
+
+/// 32 well-mixed bits of a Weyl step `x`: one xorshift–multiply, high half
+/// of the product (it depends on every bit of the multiplicand).
+#[inline(always)]
+fn mix_weyl(x: u64) -> u32 {
     ((x ^ (x >> 32)).wrapping_mul(0xD6E8_FEB8_6659_FD93) >> 32) as u32
 }
 
@@ -274,6 +325,24 @@ mod tests {
                             walked = keys.rounds(walked, lane);
                         }
                         assert_eq!(j as u32, walked, "count {count}, lane {lane}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn blocks_give_the_numbers_of_their_dimensions() {
+        for spp in [1u32, 16, 37] {
+            let keys = PixelKeys::new(3, 4321, spp);
+            for sample in 0..spp {
+                let sampler = keys.sampler(sample);
+                for first in 0..40 {
+                    let block = sampler.block(first);
+                    for offset in 0..12 {
+                        let dim = first + offset;
+                        assert_eq!(block.get_1d(offset), sampler.get_1d(dim), "dim {dim}");
+                        assert_eq!(block.get_2d(offset), sampler.get_2d(dim), "dim {dim}");
                     }
                 }
             }

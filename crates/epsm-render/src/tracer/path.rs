@@ -15,7 +15,7 @@ use crate::ray::{Ray, offset_origin};
 use crate::record::{
     ConnectionRecord, OccluderRecord, PathRecord, RecordLevel, TrianglePoint, VertexRecord,
 };
-use crate::sampler::PixelSampler;
+use crate::sampler::{Block, PixelSampler};
 use crate::scene::Scene;
 
 /// The recording state of one path.
@@ -57,7 +57,7 @@ pub(super) fn trace_path(
     let mut prev: Option<(Vec3, f32)> = None;
 
     for depth in 0..opts.max_depth {
-        let dims = DIM_FIRST_BOUNCE + depth * DIMS_PER_BOUNCE;
+        let numbers = sampler.block(DIM_FIRST_BOUNCE + depth * DIMS_PER_BOUNCE);
         counters.rays += 1;
 
         // Find the next vertex; rays that leave see the background.
@@ -112,17 +112,15 @@ pub(super) fn trace_path(
             wi_ng,
             material,
         };
-        let nee = next_event(
-            scene, &shading, beta, sampler, dims, record_at, counters, boxes,
-        );
+        let nee = next_event(scene, &shading, beta, &numbers, record_at, counters, boxes);
         contribution += nee.contribution;
         let connection = nee.connection;
         radiance += contribution;
 
         // Sample the BSDF to continue (whether or not next-event estimation
         // drew its three numbers).
-        let u_lobe = sampler.get_1d(dims + DIM_LOBE);
-        let u_dir = sampler.get_2d(dims + DIM_DIRECTION);
+        let u_lobe = numbers.get_1d(DIM_LOBE);
+        let u_dir = numbers.get_2d(DIM_DIRECTION);
         let sample = material.sample(wi, sp.uv, u_lobe, u_dir);
         let mut next = None;
         if let Some(bs) = sample {
@@ -181,7 +179,7 @@ pub(super) fn trace_path(
         // Russian roulette on the throughput with radiance scaling undone.
         if depth + 1 >= opts.rr_depth {
             let q = (beta.max_element() * eta_scale).min(0.95);
-            if q <= 0.0 || sampler.get_1d(dims + DIM_ROULETTE) >= q {
+            if q <= 0.0 || numbers.get_1d(DIM_ROULETTE) >= q {
                 break;
             }
             beta /= q;
@@ -215,16 +213,13 @@ struct NextEvent {
 
 /// Samples a light, evaluates the BSDF toward it, MIS-weights against BSDF
 /// sampling and traces the shadow ray (box tests by `boxes`). Draws three
-/// random numbers of the bounce's block starting at dimension `dims`, none at
-/// a delta vertex.
+/// random numbers of the bounce's block `numbers`, none at a delta vertex.
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
 fn next_event(
     scene: &Scene,
     at: &Shading<'_>,
     beta: Vec3,
-    sampler: &PixelSampler<'_>,
-    dims: u32,
+    numbers: &Block<'_>,
     record_at: Option<u32>,
     counters: &mut TraceCounters,
     boxes: impl BoxTest,
@@ -236,8 +231,8 @@ fn next_event(
     if at.material.is_delta() {
         return out;
     }
-    let u_select = sampler.get_1d(dims + DIM_LIGHT_SELECT);
-    let u_light = sampler.get_2d(dims + DIM_LIGHT);
+    let u_select = numbers.get_1d(DIM_LIGHT_SELECT);
+    let u_light = numbers.get_2d(DIM_LIGHT);
     let Some(ls) = scene.lights().sample(at.sp.p, u_select, u_light) else {
         return out;
     };
