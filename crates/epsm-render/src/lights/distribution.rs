@@ -10,10 +10,7 @@ use glam::Vec2;
 /// Distributions of at most this many entries are sampled from a [`Small`]
 /// table (a branch-free count and a resolved pick) instead of a binary search.
 const SMALL_MAX: usize = 16;
-const _: () = assert!(
-    SMALL_MAX == 16,
-    "Small::pick searches 16 slots in four steps"
-);
+const _: () = assert!(SMALL_MAX.is_power_of_two());
 
 /// A discrete choice: the index, its probability and the uniform number
 /// re-stretched to `[0, 1)` within the chosen entry (reusable for a further
@@ -50,7 +47,8 @@ pub struct Distribution1D {
 /// entry that `u` selects is found as the count `k` of inner boundaries
 /// `cdf[1..n]` with `cdf[i] ≤ u` (`cdf[0] = 0 ≤ u` and `cdf[n] = 1` need no
 /// test). Padded with +∞ (never `≤ u`) to a fixed length, the sorted
-/// boundaries are counted by a branch-free binary search of four steps;
+/// boundaries are counted by a branch-free binary search of `log2 P` steps
+/// (`P ≥ n` the next power of two: one step for two entries, four for 16);
 /// `pick[k]` is the entry count `k` lands in with zero-weight entries skipped
 /// downward, and its cdf bounds, precomputed. So it selects exactly what the
 /// binary search of [`Distribution1D::sample_discrete`] does.
@@ -60,6 +58,8 @@ struct Small {
     inner: [f64; SMALL_MAX],
     /// The pick of each count `k < n` (unused past `n − 1`).
     pick: [SmallPick; SMALL_MAX],
+    /// `P / 2`, the search's first step (0 for one entry).
+    first_step: usize,
 }
 
 /// The entry a [`Small`] count selects and its cdf bounds.
@@ -84,6 +84,7 @@ impl Small {
         let mut small = Box::new(Self {
             inner: [f64::INFINITY; SMALL_MAX],
             pick: [SmallPick::default(); SMALL_MAX],
+            first_step: n.next_power_of_two() / 2,
         });
         small.inner[..n - 1].copy_from_slice(&cdf[1..n]);
         for (k, pick) in small.pick.iter_mut().enumerate().take(n) {
@@ -104,12 +105,15 @@ impl Small {
     #[inline(always)]
     fn pick(&self, u: f64) -> SmallPick {
         // Upper bound in the sorted `inner`: after the step of size `s`, `k`
-        // is the count among the first `k + s` boundaries, so after 8, 4, 2
-        // and 1 it counts all of the first 15 (the 16th is +∞). The masks
-        // only spare the bounds checks: `k + s − 1 ≤ 14`, `k ≤ 15`.
+        // is the count among the first `k + s` boundaries, so after P/2, …,
+        // 2 and 1 it counts all of the first P − 1 ≥ n − 1 (the rest are
+        // +∞). The masks only spare the bounds checks: `k + s − 1 ≤ 14`,
+        // `k ≤ 15`.
         let mut k = 0;
-        for step in [8, 4, 2, 1] {
+        let mut step = self.first_step;
+        while step > 0 {
             k += step * usize::from(self.inner[(k + step - 1) & (SMALL_MAX - 1)] <= u);
+            step /= 2;
         }
         self.pick[k & (SMALL_MAX - 1)]
     }
