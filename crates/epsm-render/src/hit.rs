@@ -18,6 +18,7 @@
 
 use glam::{Affine3A, DAffine3, DMat3, DVec3, Mat3A, Vec2, Vec3};
 
+use crate::frame::Frame;
 use crate::scene::{Mesh, Object, ObjectId};
 
 /// A ray hit as the BVH reports it.
@@ -51,6 +52,9 @@ pub struct SurfacePoint {
     pub ns: Vec3,
     /// Texture coordinates.
     pub uv: Vec2,
+    /// The shading frame around `ns`, `Frame::from_normal(ns)` (made once per
+    /// triangle in the static shading table where `ns` is constant).
+    pub frame: Frame,
 }
 
 /// An object's placement in `f32`: the world transform and the matrix that
@@ -125,7 +129,13 @@ pub(crate) fn surface_point(
         ns
     };
     let uv = texture_uv(mesh, triangle, b1, b2);
-    SurfacePoint { p, ng, ns, uv }
+    SurfacePoint {
+        p,
+        ng,
+        ns,
+        uv,
+        frame: Frame::from_normal(ns),
+    }
 }
 
 /// The texture coordinates of `triangle` of `mesh` at `(b1, b2)`: the

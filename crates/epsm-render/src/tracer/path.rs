@@ -96,7 +96,7 @@ pub(super) fn trace_path(
             contribution += beta * le * w;
         }
 
-        let frame = Frame::from_normal(sp.ns);
+        let frame = sp.frame;
         let wi = material.to_local(&frame, wi_world);
         let kind = material.vertex_kind();
 
