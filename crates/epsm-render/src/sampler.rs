@@ -28,10 +28,7 @@
 //!
 //! Cost: the permutation keys of each stratified dimension come from a hash
 //! of `(seed, pixel, dimension)` that does not depend on the sample;
-//! [`PixelKeys`] computes those once per pixel for all its samples, in
-//! lanes (one per dimension), so that making a sample's stream permutes its
-//! index for all stratified dimensions at once with 8-lane vector
-//! operations where the CPU has them. Every
+//! [`PixelKeys`] computes those once per pixel for all its samples. Every
 //! other bit of randomness (the stratified jitters and all later numbers) is
 //! one multiply–xorshift of a Weyl step `k + (d + 1)·φ` from a per-sample
 //! key `k` (one 64-bit finaliser of `(seed, pixel, sample)`, computed when
@@ -48,9 +45,8 @@ use glam::Vec2;
 #[derive(Clone, Copy, Debug)]
 pub struct PixelKeys {
     key: u64,
-    /// The permutation keys of the stratified dimensions, lane `d` for
-    /// dimension `d`.
-    scramble: Scrambles,
+    /// The permutation keys of each stratified dimension.
+    strata: [Scramble; STRATIFIED_DIMENSIONS as usize],
     /// Strata per dimension (the samples per pixel), `≥ 1`.
     count: u32,
     /// `2^k − 1`, `2^k` the smallest power of two `≥ count`.
@@ -62,20 +58,24 @@ pub struct PixelKeys {
     inv_count: f32,
 }
 
-/// Lanes of the stratum permutations: the stratified dimensions padded to
-/// two 8-lane vectors (the padding lanes repeat the first dimensions' keys
-/// and are never read).
-const LANES: usize = 16;
-const _: () = assert!(STRATIFIED_DIMENSIONS as usize <= LANES);
-
-/// The keys of the stratum permutations, one lane per dimension
-/// (structure of arrays: [`PixelKeys::strata`] runs the lanes together).
-#[derive(Clone, Copy, Debug)]
-struct Scrambles {
+/// The keys of one dimension's stratum permutation ([`PixelKeys::stratum`]).
+#[derive(Clone, Copy, Debug, Default)]
+struct Scramble {
     /// Xored into the index at the start of each of the three rounds.
-    xor: [[u32; LANES]; 3],
+    xor: [u32; 3],
     /// The odd multipliers of the first two rounds.
-    mul: [[u32; LANES]; 2],
+    mul: [u32; 2],
+}
+
+impl Scramble {
+    /// The keys drawn from a dimension's 64-bit hash.
+    fn new(h: u64) -> Self {
+        let (a, b) = (h as u32, (h >> 32) as u32);
+        Self {
+            xor: [a, b >> 16, a >> 16],
+            mul: [b | 1, (a >> 8) | 1],
+        }
+    }
 }
 
 impl PixelKeys {
@@ -84,22 +84,9 @@ impl PixelKeys {
     #[inline]
     pub fn new(seed: u32, pixel: u32, spp: u32) -> Self {
         let key = pixel_key(seed, pixel);
-        let mut scramble = Scrambles {
-            xor: [[0; LANES]; 3],
-            mul: [[0; LANES]; 2],
-        };
-        for d in 0..STRATIFIED_DIMENSIONS {
-            // The dimension's 64-bit hash keys its permutation.
-            let h = dim_hash(key, d);
-            let (a, b) = (h as u32, (h >> 32) as u32);
-            for lane in (d as usize..LANES).step_by(STRATIFIED_DIMENSIONS as usize) {
-                [
-                    scramble.xor[0][lane],
-                    scramble.xor[1][lane],
-                    scramble.xor[2][lane],
-                ] = [a, b >> 16, a >> 16];
-                [scramble.mul[0][lane], scramble.mul[1][lane]] = [b | 1, (a >> 8) | 1];
-            }
+        let mut strata = [Scramble::default(); STRATIFIED_DIMENSIONS as usize];
+        for (d, s) in (0..).zip(&mut strata) {
+            *s = Scramble::new(dim_hash(key, d));
         }
         let count = spp.max(1);
         let mask = count
@@ -109,7 +96,7 @@ impl PixelKeys {
         let shift = |r: u32| r.clamp(1, k.saturating_sub(1).max(1));
         Self {
             key,
-            scramble,
+            strata,
             count,
             mask,
             shifts: [shift(k / 2 + 1), shift(k / 4), shift(k.div_ceil(2))],
@@ -118,54 +105,30 @@ impl PixelKeys {
     }
 
     /// The stream of sample `sample` (`< spp`) of this pixel.
-    #[inline(always)]
+    #[inline]
     pub fn sampler(&self, sample: u32) -> PixelSampler<'_> {
         PixelSampler {
             keys: self,
             sample_key: mix64(self.key ^ u64::from(sample).wrapping_mul(SAMPLE_STEP)),
-            strata: self.strata(sample),
+            sample,
         }
     }
 
-    /// The three rounds of the stratum permutation of lane `lane` on index
-    /// `i ≤ mask` (module docs).
+    /// Stratum `π(i)` of sample `i < count` under the permutation keyed by
+    /// `s` (module docs): three rounds on `0..=mask`, walked again while the
+    /// result is `≥ count`.
     #[inline(always)]
-    fn rounds(&self, mut i: u32, lane: usize) -> u32 {
-        let ([r0, r1, r2], s) = (self.shifts, &self.scramble);
-        i = (i ^ s.xor[0][lane]).wrapping_mul(s.mul[0][lane]) & self.mask;
-        i ^= i >> r0;
-        i = (i ^ s.xor[1][lane]).wrapping_mul(s.mul[1][lane]) & self.mask;
-        i ^= i >> r1;
-        i = (i ^ s.xor[2][lane]).wrapping_mul(0x6935_FA69) & self.mask;
-        i ^ (i >> r2)
-    }
-
-    /// Stratum `π_d(i)` of sample `i < count` in lane `d` for every
-    /// stratified dimension `d`: the rounds on all lanes at once, then (for a
-    /// count that is not a power of two) again on the lanes still `≥ count`
-    /// until none is, which walks each lane's cycle as far as a scalar walk
-    /// would.
-    #[inline(always)]
-    fn strata(&self, i: u32) -> [u32; LANES] {
-        let mut x = [i; LANES];
-        for (lane, x) in x.iter_mut().enumerate() {
-            *x = self.rounds(*x, lane);
-        }
-        if self.mask != self.count - 1 {
-            self.walk(&mut x);
-        }
-        x
-    }
-
-    /// The cycle walk of [`Self::strata`] (out of line: only counts that are
-    /// not powers of two need it).
-    #[inline(never)]
-    fn walk(&self, x: &mut [u32; LANES]) {
-        while x.iter().any(|&s| s >= self.count) {
-            for (lane, x) in x.iter_mut().enumerate() {
-                if *x >= self.count {
-                    *x = self.rounds(*x, lane);
-                }
+    fn stratum(&self, mut i: u32, s: &Scramble) -> u32 {
+        let [r0, r1, r2] = self.shifts;
+        loop {
+            i = (i ^ s.xor[0]).wrapping_mul(s.mul[0]) & self.mask;
+            i ^= i >> r0;
+            i = (i ^ s.xor[1]).wrapping_mul(s.mul[1]) & self.mask;
+            i ^= i >> r1;
+            i = (i ^ s.xor[2]).wrapping_mul(0x6935_FA69) & self.mask;
+            i ^= i >> r2;
+            if i < self.count {
+                return i;
             }
         }
     }
@@ -183,9 +146,7 @@ pub struct PixelSampler<'a> {
     /// The per-sample key of the jitters and of the dimensions past the
     /// stratified ones.
     sample_key: u64,
-    /// The sample's stratum in each stratified dimension (lane `d` for
-    /// dimension `d`).
-    strata: [u32; LANES],
+    sample: u32,
 }
 
 impl PixelSampler<'_> {
@@ -210,11 +171,12 @@ impl PixelSampler<'_> {
     #[inline(always)]
     fn number(&self, dim: u32, x: u64) -> f32 {
         let jitter = to_unit(mix_weyl(x));
-        if dim >= STRATIFIED_DIMENSIONS {
+        let keys = self.keys;
+        let Some(scramble) = keys.strata.get(dim as usize) else {
             return jitter;
-        }
-        let stratum = self.strata[dim as usize];
-        ((stratum as f32 + jitter) * self.keys.inv_count).min(ONE_MINUS_EPSILON)
+        };
+        let stratum = keys.stratum(self.sample, scramble);
+        ((stratum as f32 + jitter) * keys.inv_count).min(ONE_MINUS_EPSILON)
     }
 
     /// The numbers of dimensions `dim` and `dim + 1`, in `[0, 1)²`.
@@ -313,18 +275,12 @@ mod tests {
         for count in [1u32, 2, 3, 7, 16, 17, 64, 100, 256] {
             for pixel in [0u32, 1, 0xDEAD_BEEF, 12345] {
                 let keys = PixelKeys::new(9, pixel, count);
-                for lane in 0..LANES {
+                for scramble in &keys.strata {
                     let mut seen = vec![false; count as usize];
                     for i in 0..count {
-                        let j = keys.strata(i)[lane] as usize;
+                        let j = keys.stratum(i, scramble) as usize;
                         assert!(!seen[j], "count {count}, pixel {pixel}: {j} twice");
                         seen[j] = true;
-                        // The lanes walk as a scalar cycle walk would.
-                        let mut walked = keys.rounds(i, lane);
-                        while walked >= count {
-                            walked = keys.rounds(walked, lane);
-                        }
-                        assert_eq!(j as u32, walked, "count {count}, lane {lane}");
                     }
                 }
             }
@@ -393,8 +349,8 @@ mod tests {
                 for (da, db) in pairs {
                     let mut cells = vec![[0.0f64; 2]; (grid * grid) as usize];
                     for s in 0..spp {
-                        let strata = keys.strata(s);
-                        let (sa, sb) = (strata[da], strata[db]);
+                        let sa = keys.stratum(s, &keys.strata[da]);
+                        let sb = keys.stratum(s, &keys.strata[db]);
                         cells[(sa / (spp / grid) * grid + sb / (spp / grid)) as usize][0] += 1.0;
                         cells[(sa % grid * grid + sb % grid) as usize][1] += 1.0;
                     }
