@@ -116,24 +116,6 @@ pub struct BsdfSample {
     pub m: Vec3,
 }
 
-/// The BSDF value and sampling density of one pair of directions
-/// ([`Material::eval_pdf`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct BsdfEval {
-    /// `f(wi, wo)·|cos θo|`, as [`Material::eval`].
-    pub value: Vec3,
-    /// Solid-angle pdf of `wo`, as [`Material::pdf`].
-    pub pdf: f32,
-}
-
-impl BsdfEval {
-    /// Nothing scattered.
-    pub const ZERO: Self = Self {
-        value: Vec3::ZERO,
-        pdf: 0.0,
-    };
-}
-
 impl Material {
     /// The kind of manifold vertex this material makes.
     #[inline(always)]
@@ -199,36 +181,31 @@ impl Material {
     /// back face of one-sided materials.
     #[inline(always)]
     pub fn eval(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> Vec3 {
-        self.eval_pdf(wi, wo, uv).value
-    }
-
-    /// [`Self::eval`] and [`Self::pdf`] of the same directions (local), with
-    /// one side test and one dispatch (next-event estimation needs both).
-    #[inline(always)]
-    pub fn eval_pdf(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> BsdfEval {
         let Some(side) = self.side(wi) else {
-            return BsdfEval::ZERO;
+            return Vec3::ZERO;
         };
         let (wi, wo) = (side.apply(wi), side.apply(wo));
         match &self.bsdf {
-            Bsdf::Diffuse(d) => BsdfEval {
-                value: d.eval(wi, wo, uv),
-                pdf: d.pdf(wi, wo),
-            },
-            Bsdf::RoughConductor(r) => BsdfEval {
-                value: r.eval(wi, wo),
-                pdf: r.pdf(wi, wo),
-            },
-            Bsdf::Conductor(_) | Bsdf::Dielectric(_) => BsdfEval::ZERO,
+            Bsdf::Diffuse(d) => d.eval(wi, wo, uv),
+            Bsdf::RoughConductor(r) => r.eval(wi, wo),
+            Bsdf::Conductor(_) | Bsdf::Dielectric(_) => Vec3::ZERO,
         }
     }
 
     /// Solid-angle pdf with which `sample` returns `wo` through a non-delta
     /// lobe (zero where `eval` is zero by construction, and for delta lobes).
-    /// No current lobe's pdf depends on the texture coordinates `uv`.
+    /// No current lobe's pdf depends on the texture coordinates `_uv`.
     #[inline(always)]
-    pub fn pdf(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> f32 {
-        self.eval_pdf(wi, wo, uv).pdf
+    pub fn pdf(&self, wi: Vec3, wo: Vec3, _uv: Vec2) -> f32 {
+        let Some(side) = self.side(wi) else {
+            return 0.0;
+        };
+        let (wi, wo) = (side.apply(wi), side.apply(wo));
+        match &self.bsdf {
+            Bsdf::Diffuse(d) => d.pdf(wi, wo),
+            Bsdf::RoughConductor(r) => r.pdf(wi, wo),
+            Bsdf::Conductor(_) | Bsdf::Dielectric(_) => 0.0,
+        }
     }
 
     /// Which side `wi` sees: `None` for the back of a one-sided material.

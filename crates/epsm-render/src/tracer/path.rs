@@ -236,18 +236,18 @@ fn next_event(
     let Some(ls) = scene.lights().sample(at.sp.p, u_select, u_light) else {
         return out;
     };
+    let wo = at.material.to_local(at.frame, ls.wo);
+    let f = at.material.eval(at.wi, wo, at.sp.uv);
     let wo_ng = ls.wo.dot(at.sp.ng);
     let same_side = wo_ng * at.wi_ng > 0.0;
-    if !same_side || ls.pdf <= 0.0 {
+    if f == Vec3::ZERO || !same_side || ls.pdf <= 0.0 {
         return out;
     }
-    let wo = at.material.to_local(at.frame, ls.wo);
-    let bsdf = at.material.eval_pdf(at.wi, wo, at.sp.uv);
-    let f = bsdf.value;
-    if f == Vec3::ZERO {
-        return out;
-    }
-    let w = if ls.delta { 1.0 } else { mis(ls.pdf, bsdf.pdf) };
+    let w = if ls.delta {
+        1.0
+    } else {
+        mis(ls.pdf, at.material.pdf(at.wi, wo, at.sp.uv))
+    };
     let unoccluded = beta * f * ls.radiance * (w / ls.pdf);
     let shadow = shadow_ray(at.sp, ls.wo, wo_ng, ls.position, ls.dist);
     counters.shadow_rays += 1;
