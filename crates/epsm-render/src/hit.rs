@@ -18,6 +18,7 @@
 
 use glam::{Affine3A, DAffine3, DMat3, DVec3, Mat3A, Vec2, Vec3};
 
+use crate::frame::Frame;
 use crate::scene::{Mesh, Object, ObjectId};
 
 /// A ray hit as the BVH reports it.
@@ -51,6 +52,9 @@ pub struct SurfacePoint {
     pub ns: Vec3,
     /// Texture coordinates.
     pub uv: Vec2,
+    /// The shading frame around `ns`, `Frame::from_normal(ns)` (made once per
+    /// triangle in the static shading table where `ns` is constant).
+    pub frame: Frame,
 }
 
 /// An object's placement in `f32`: the world transform and the matrix that
@@ -125,18 +129,31 @@ pub(crate) fn surface_point(
         ns
     };
     let uv = texture_uv(mesh, triangle, b1, b2);
-    SurfacePoint { p, ng, ns, uv }
+    SurfacePoint {
+        p,
+        ng,
+        ns,
+        uv,
+        frame: Frame::from_normal(ns),
+    }
 }
 
 /// The texture coordinates of `triangle` of `mesh` at `(b1, b2)`: the
 /// interpolated `uvs`, or `(b1, b2)` without them.
 #[inline(always)]
-pub(crate) fn texture_uv(mesh: &Mesh, triangle: u32, b1: f32, b2: f32) -> Vec2 {
+fn texture_uv(mesh: &Mesh, triangle: u32, b1: f32, b2: f32) -> Vec2 {
     if mesh.uvs.is_empty() {
         return Vec2::new(b1, b2);
     }
-    let [i0, i1, i2] = mesh.indices[triangle as usize].map(|i| i as usize);
-    (1.0 - b1 - b2) * mesh.uvs[i0] + b1 * mesh.uvs[i1] + b2 * mesh.uvs[i2]
+    let uvs = mesh.indices[triangle as usize].map(|i| mesh.uvs[i as usize]);
+    interpolate_uv(uvs, b1, b2)
+}
+
+/// Texture coordinates `uvs` of a triangle's three vertices interpolated at
+/// `(b1, b2)`.
+#[inline(always)]
+pub(crate) fn interpolate_uv([uv0, uv1, uv2]: [Vec2; 3], b1: f32, b2: f32) -> Vec2 {
+    (1.0 - b1 - b2) * uv0 + b1 * uv1 + b2 * uv2
 }
 
 /// `normalize(e1 × e2)` in `f32`, or in `f64` when the cross product

@@ -111,7 +111,6 @@ impl PixelKeys {
             keys: self,
             sample_key: mix64(self.key ^ u64::from(sample).wrapping_mul(SAMPLE_STEP)),
             sample,
-            dim: 0,
         }
     }
 
@@ -135,7 +134,11 @@ impl PixelKeys {
     }
 }
 
-/// The random stream of one pixel sample.
+/// The random stream of one pixel sample: number `d` of the stream is
+/// [`Self::get_1d`]`(d)`, a pure function of `(seed, pixel, sample, d)`, so a
+/// caller draws each number by its dimension (paths give each bounce a fixed
+/// block of dimensions, so that a path's numbers do not depend on earlier
+/// branches) and the stream has no position to keep.
 #[derive(Clone, Copy, Debug)]
 pub struct PixelSampler<'a> {
     /// The pixel's sample-independent keys ([`PixelKeys`]).
@@ -144,36 +147,71 @@ pub struct PixelSampler<'a> {
     /// stratified ones.
     sample_key: u64,
     sample: u32,
-    dim: u32,
 }
 
 impl PixelSampler<'_> {
-    /// Jumps to dimension `dim` (paths give each bounce a fixed block of
-    /// dimensions so that a path's numbers do not depend on earlier branches).
-    #[inline]
-    pub fn set_dimension(&mut self, dim: u32) {
-        self.dim = dim;
+    /// The number of dimension `dim`, in `[0, 1)`.
+    #[inline(always)]
+    pub fn get_1d(&self, dim: u32) -> f32 {
+        self.number(dim, weyl(self.sample_key, dim))
     }
 
-    /// The next number in `[0, 1)`.
+    /// The numbers of dimensions `first + offset` ([`Block`]), e.g. one
+    /// bounce's block.
     #[inline(always)]
-    pub fn next_1d(&mut self) -> f32 {
-        let dim = self.dim;
-        self.dim += 1;
+    pub fn block(&self, first: u32) -> Block<'_> {
+        Block {
+            sampler: self,
+            first,
+            weyl: weyl(self.sample_key, first),
+        }
+    }
+
+    /// The number of dimension `dim` whose Weyl step is `x`.
+    #[inline(always)]
+    fn number(&self, dim: u32, x: u64) -> f32 {
+        let jitter = to_unit(mix_weyl(x));
         let keys = self.keys;
         let Some(scramble) = keys.strata.get(dim as usize) else {
-            return to_unit(weyl_mix(self.sample_key, dim));
+            return jitter;
         };
         let stratum = keys.stratum(self.sample, scramble);
-        let jitter = to_unit(weyl_mix(self.sample_key, dim));
         ((stratum as f32 + jitter) * keys.inv_count).min(ONE_MINUS_EPSILON)
     }
 
-    /// The next two numbers in `[0, 1)²`.
-    #[inline]
-    pub fn next_2d(&mut self) -> Vec2 {
-        let x = self.next_1d();
-        Vec2::new(x, self.next_1d())
+    /// The numbers of dimensions `dim` and `dim + 1`, in `[0, 1)²`.
+    #[inline(always)]
+    pub fn get_2d(&self, dim: u32) -> Vec2 {
+        Vec2::new(self.get_1d(dim), self.get_1d(dim + 1))
+    }
+}
+
+/// The numbers of a sample's dimensions `first + offset`
+/// ([`PixelSampler::block`]): the same as [`PixelSampler::get_1d`]`(first +
+/// offset)`, with the Weyl step of `first` computed once, so each number adds
+/// the constant `offset·φ` instead of multiplying.
+#[derive(Clone, Copy, Debug)]
+pub struct Block<'a> {
+    sampler: &'a PixelSampler<'a>,
+    first: u32,
+    /// The Weyl step of dimension `first`.
+    weyl: u64,
+}
+
+impl Block<'_> {
+    /// The number of dimension `first + offset`, in `[0, 1)`.
+    #[inline(always)]
+    pub fn get_1d(&self, offset: u32) -> f32 {
+        let x = self
+            .weyl
+            .wrapping_add(u64::from(offset).wrapping_mul(GOLDEN));
+        self.sampler.number(self.first + offset, x)
+    }
+
+    /// The numbers of dimensions `first + offset` and `first + offset + 1`.
+    #[inline(always)]
+    pub fn get_2d(&self, offset: u32) -> Vec2 {
+        Vec2::new(self.get_1d(offset), self.get_1d(offset + 1))
     }
 }
 
@@ -206,12 +244,17 @@ const SAMPLE_STEP: u64 = 0xD1B5_4A32_D192_ED03;
 /// The golden-ratio Weyl step between unstratified dimensions.
 const GOLDEN: u64 = 0x9E37_79B9_7F4A_7C15;
 
-/// 32 well-mixed bits of dimension `dim` from a per-sample key: one
-/// xorshift–multiply of the Weyl step `key + (dim + 1)·φ`, high half of the
-/// product (it depends on every bit of the multiplicand).
-#[inline]
-fn weyl_mix(key: u64, dim: u32) -> u32 {
-    let x = key.wrapping_add(u64::from(dim + 1).wrapping_mul(GOLDEN));
+/// The Weyl step `key + (dim + 1)·φ` of dimension `dim` from a per-sample
+/// key (wrapping, so steps of dimensions `d` and `d + k` differ by `k·φ`).
+#[inline(always)]
+fn weyl(key: u64, dim: u32) -> u64 {
+    key.wrapping_add(u64::from(dim + 1).wrapping_mul(GOLDEN))
+}
+
+/// 32 well-mixed bits of a Weyl step `x`: one xorshift–multiply, high half
+/// of the product (it depends on every bit of the multiplicand).
+#[inline(always)]
+fn mix_weyl(x: u64) -> u32 {
     ((x ^ (x >> 32)).wrapping_mul(0xD6E8_FEB8_6659_FD93) >> 32) as u32
 }
 
@@ -245,15 +288,31 @@ mod tests {
     }
 
     #[test]
+    fn blocks_give_the_numbers_of_their_dimensions() {
+        for spp in [1u32, 16, 37] {
+            let keys = PixelKeys::new(3, 4321, spp);
+            for sample in 0..spp {
+                let sampler = keys.sampler(sample);
+                for first in 0..40 {
+                    let block = sampler.block(first);
+                    for offset in 0..12 {
+                        let dim = first + offset;
+                        assert_eq!(block.get_1d(offset), sampler.get_1d(dim), "dim {dim}");
+                        assert_eq!(block.get_2d(offset), sampler.get_2d(dim), "dim {dim}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
     fn every_dimension_is_stratified_over_the_pixel_samples() {
         for (spp, pixel) in [(37, 1234), (64, 99), (100, 5)] {
             let keys = PixelKeys::new(7, pixel, spp);
             for dim in 0..STRATIFIED_DIMENSIONS {
                 let mut strata = vec![0u32; spp as usize];
                 for s in 0..spp {
-                    let mut r = keys.sampler(s);
-                    r.set_dimension(dim);
-                    let x = r.next_1d();
+                    let x = keys.sampler(s).get_1d(dim);
                     assert!((0.0..1.0).contains(&x));
                     strata[(x * spp as f32) as usize] += 1;
                 }
@@ -322,9 +381,7 @@ mod tests {
             let n = 256 * 400;
             for i in 0..n {
                 let keys = PixelKeys::new(5, i / 16, 16);
-                let mut r = keys.sampler(i % 16);
-                r.set_dimension(first);
-                let v = r.next_2d();
+                let v = keys.sampler(i % 16).get_2d(first);
                 cells[(v.x * 16.0) as usize * 16 + (v.y * 16.0) as usize] += 1;
             }
             let expected = n as f64 / 256.0;
@@ -341,9 +398,7 @@ mod tests {
     fn streams_are_pure_functions_of_their_key_and_differ_between_keys() {
         let stream = |seed, pixel, sample, dim| {
             let keys = PixelKeys::new(seed, pixel, 16);
-            let mut r = keys.sampler(sample);
-            r.set_dimension(dim);
-            r.next_2d()
+            keys.sampler(sample).get_2d(dim)
         };
         for dim in [0, 30] {
             let a = stream(1, 2, 3, dim);
@@ -363,9 +418,7 @@ mod tests {
             let (mut sx, mut sy, mut sxy, mut sxx, mut syy) = (0.0f64, 0.0, 0.0, 0.0, 0.0);
             for px in 0..n {
                 let keys = PixelKeys::new(3, px, 4);
-                let mut r = keys.sampler(px % 4);
-                r.set_dimension(dim);
-                let v = r.next_2d();
+                let v = keys.sampler(px % 4).get_2d(dim);
                 let (x, y) = (v.x as f64, v.y as f64);
                 sx += x;
                 sy += y;

@@ -7,6 +7,7 @@ use std::sync::Arc;
 use bvh_util::{Rng, grid, object, random_scene, random_transform, soup};
 use epsm_render::Ray;
 use epsm_render::bvh::Accel;
+use epsm_render::frame::Frame;
 use epsm_render::hit::{intersect_triangle_f64, surface_point_f64};
 use glam::{DAffine3, DVec3, Vec2, Vec3};
 
@@ -186,6 +187,9 @@ fn static_table_and_instance_placement_agree() {
         };
         let a = statics.surface_point(&objects, &hit);
         let b = mixed.surface_point(&objects, &hit);
+        // Each path's frame is the one made from its shading normal.
+        assert_eq!(a.frame, Frame::from_normal(a.ns));
+        assert_eq!(b.frame, Frame::from_normal(b.ns));
         assert!(
             a.p.distance(b.p) < 1e-4 * (1.0 + hit.t)
                 && a.ng.distance(b.ng) < 1e-4

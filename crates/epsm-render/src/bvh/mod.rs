@@ -41,7 +41,7 @@ use std::fmt;
 use std::sync::Arc;
 use std::time::Instant;
 
-use glam::{DVec3, Vec2, Vec3A};
+use glam::{DVec3, Vec3A};
 use obvhs::aabb::Aabb;
 
 use crate::hit::{self, Hit, SurfacePoint};
@@ -376,17 +376,7 @@ impl Accel {
             .as_deref()
             .and_then(|w| w.shading(hit.world_index, hit.object, hit.triangle))
         {
-            let uv = if tri.textured {
-                hit::texture_uv(
-                    &objects[hit.object as usize].mesh,
-                    hit.triangle,
-                    hit.b1,
-                    hit.b2,
-                )
-            } else {
-                Vec2::new(hit.b1, hit.b2)
-            };
-            return tri.point(hit.b1, hit.b2, uv);
+            return tri.point(hit.b1, hit.b2);
         }
         let object = &objects[hit.object as usize];
         let cached = self

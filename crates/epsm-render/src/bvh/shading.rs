@@ -1,7 +1,7 @@
 //! World-space shading data of the static triangles, computed once when the
 //! static BVH is built, so a hit on static geometry costs no transform and no
-//! index lookups: position, unit geometric normal and shading normal come
-//! from one record.
+//! index lookups: position, unit geometric normal, shading normal and frame
+//! and texture coordinates come from one record.
 //!
 //! Model: the same as `hit::surface_point` (see the `hit` module), on
 //! the world-space vertices of the static BVH (transformed in `f64`, rounded
@@ -9,23 +9,26 @@
 //! `normalize((P1 − P0) × (P2 − P0))` rounded to `f32`. Vertex normals are
 //! mapped to world space by the inverse transpose in `f64` and stored
 //! unnormalised; when all three are equal (flat faces such as the built-in
-//! rectangles) the unit shading normal is stored instead and the geometric
-//! normal is flipped into its hemisphere up front.
+//! rectangles), or without vertex normals, the shading normal is the same
+//! over the triangle and its shading frame (`Frame::from_normal`, the same
+//! value the hit would make) is stored instead, with the geometric normal
+//! flipped into its hemisphere up front.
 //!
 //! No parameters.
 
 use glam::{DMat3, DVec3, Vec2, Vec3};
 
-use crate::hit::SurfacePoint;
+use crate::frame::Frame;
+use crate::hit::{self, SurfacePoint};
 use crate::scene::Object;
 
 /// How a static triangle's shading normal is found.
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Normals {
-    /// No vertex normals (or they cancel): the geometric normal.
-    Geometric,
-    /// Three equal vertex normals: this unit world-space normal.
-    Constant(Vec3),
+    /// The same unit shading normal over the whole triangle (the geometric
+    /// normal without vertex normals, or three equal vertex normals): its
+    /// shading frame, `Frame::from_normal(ns)`, made once.
+    Flat(Frame),
     /// `n0` and the differences `n1 − n0`, `n2 − n0` of the world-space
     /// vertex normals (unnormalised): `normalize(n0 + b1·d1 + b2·d2)`.
     Interpolated([Vec3; 3]),
@@ -44,8 +47,10 @@ pub(crate) struct ShadingTriangle {
     /// normal).
     ng: Vec3,
     normals: Normals,
-    /// Whether the mesh has texture coordinates (looked up at the hit).
-    pub textured: bool,
+    /// The three vertices' texture coordinates, when the mesh has them
+    /// (interpolated at the hit by [`hit::interpolate_uv`]; without them the
+    /// texture coordinates are `(b1, b2)`).
+    uvs: Option<[Vec2; 3]>,
 }
 
 impl ShadingTriangle {
@@ -66,7 +71,7 @@ impl ShadingTriangle {
             .unwrap_or(DVec3::Z)
             .as_vec3();
         let normals = if mesh.normals.is_empty() {
-            Normals::Geometric
+            Normals::Flat(Frame::from_normal(ng))
         } else {
             let [n0, n1, n2] = mesh.indices[triangle as usize]
                 .map(|i| (*normal_from_object * mesh.normals[i as usize].as_dvec3()).as_vec3());
@@ -76,9 +81,9 @@ impl ShadingTriangle {
                         if ng.dot(ns) < 0.0 {
                             ng = -ng;
                         }
-                        Normals::Constant(ns)
+                        Normals::Flat(Frame::from_normal(ns))
                     }
-                    None => Normals::Geometric,
+                    None => Normals::Flat(Frame::from_normal(ng)),
                 }
             } else {
                 Normals::Interpolated([n0, n1 - n0, n2 - n0])
@@ -90,17 +95,17 @@ impl ShadingTriangle {
             e2: p2 - p0,
             ng,
             normals,
-            textured: !mesh.uvs.is_empty(),
+            uvs: (!mesh.uvs.is_empty())
+                .then(|| mesh.indices[triangle as usize].map(|i| mesh.uvs[i as usize])),
         }
     }
 
-    /// The shading point at `(b1, b2)`, with `uv` as given.
+    /// The shading point at `(b1, b2)`.
     #[inline(always)]
-    pub fn point(&self, b1: f32, b2: f32, uv: Vec2) -> SurfacePoint {
+    pub fn point(&self, b1: f32, b2: f32) -> SurfacePoint {
         let p = self.p0 + b1 * self.e1 + b2 * self.e2;
-        let (ng, ns) = match self.normals {
-            Normals::Geometric => (self.ng, self.ng),
-            Normals::Constant(ns) => (self.ng, ns),
+        let (ng, frame) = match self.normals {
+            Normals::Flat(frame) => (self.ng, frame),
             Normals::Interpolated([n0, d1, d2]) => {
                 let ns = (n0 + b1 * d1 + b2 * d2).try_normalize().unwrap_or(self.ng);
                 let ng = if self.ng.dot(ns) < 0.0 {
@@ -108,9 +113,19 @@ impl ShadingTriangle {
                 } else {
                     self.ng
                 };
-                (ng, ns)
+                (ng, Frame::from_normal(ns))
             }
         };
-        SurfacePoint { p, ng, ns, uv }
+        let uv = match self.uvs {
+            Some(uvs) => hit::interpolate_uv(uvs, b1, b2),
+            None => Vec2::new(b1, b2),
+        };
+        SurfacePoint {
+            p,
+            ng,
+            ns: frame.n,
+            uv,
+            frame,
+        }
     }
 }

@@ -33,16 +33,28 @@ pub struct AreaEmitter {
     pub object: ObjectId,
     /// Emitted radiance.
     pub emission: Vec3,
-    /// World-space vertices per triangle, `f32` (transformed in `f64`).
-    triangles: Vec<[Vec3; 3]>,
-    /// Unit front-face normals (zero for degenerate triangles).
-    normals: Vec<Vec3>,
+    /// The triangles, world space.
+    triangles: Vec<EmitterTriangle>,
     /// Triangle choice by area; `None` when the object has no area.
     by_area: Option<Distribution1D>,
     /// Total world-space area.
     area: f64,
     /// `1 / area` (zero for a degenerate object), the density of [`Self::sample`].
     pdf_area: f64,
+}
+
+/// One world-space emitting triangle: what sampling a point on it reads,
+/// in one record.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct EmitterTriangle {
+    /// First vertex, `f32` (transformed in `f64`).
+    p0: Vec3,
+    /// `p1 − p0` of the `f32` vertices.
+    e1: Vec3,
+    /// `p2 − p0` of the `f32` vertices.
+    e2: Vec3,
+    /// Unit front-face normal (zero for a degenerate triangle).
+    normal: Vec3,
 }
 
 /// A uniformly sampled point on an emitter.
@@ -66,7 +78,6 @@ impl AreaEmitter {
     pub fn new(object_id: ObjectId, object: &Object, emission: Vec3) -> Self {
         let mesh = &object.mesh;
         let mut triangles = Vec::with_capacity(mesh.len());
-        let mut normals = Vec::with_capacity(mesh.len());
         let mut areas = Vec::with_capacity(mesh.len());
         for tri in 0..mesh.len() as u32 {
             let [p0, p1, p2] = mesh
@@ -75,19 +86,23 @@ impl AreaEmitter {
             let cross = (p1 - p0).cross(p2 - p0);
             let len = cross.length();
             areas.push(0.5 * len);
-            normals.push(if len > 0.0 {
-                (cross / len).as_vec3()
-            } else {
-                Vec3::ZERO
+            let [p0, p1, p2] = [p0, p1, p2].map(|p| p.as_vec3());
+            triangles.push(EmitterTriangle {
+                p0,
+                e1: p1 - p0,
+                e2: p2 - p0,
+                normal: if len > 0.0 {
+                    (cross / len).as_vec3()
+                } else {
+                    Vec3::ZERO
+                },
             });
-            triangles.push([p0.as_vec3(), p1.as_vec3(), p2.as_vec3()]);
         }
         let area = areas.iter().sum();
         Self {
             object: object_id,
             emission,
             triangles,
-            normals,
             by_area: Distribution1D::new(&areas),
             area,
             pdf_area: if area > 0.0 { 1.0 / area } else { 0.0 },
@@ -107,7 +122,7 @@ impl AreaEmitter {
 
     /// The unit front-face normal of `triangle`.
     pub fn normal(&self, triangle: u32) -> Vec3 {
-        self.normals[triangle as usize]
+        self.triangles[triangle as usize].normal
     }
 
     /// A uniform point on the object: `u_triangle` picks the triangle by area,
@@ -115,15 +130,15 @@ impl AreaEmitter {
     #[inline(always)]
     pub fn sample(&self, u_triangle: f64, u: Vec2) -> Option<AreaPoint> {
         let pick = self.by_area.as_ref()?.sample_discrete(u_triangle);
-        let [p0, p1, p2] = self.triangles[pick.index];
+        let tri = &self.triangles[pick.index];
         let su = u.x.sqrt();
         let (b1, b2) = (su * (1.0 - u.y), su * u.y);
         Some(AreaPoint {
             triangle: pick.index as u32,
             b1,
             b2,
-            position: p0 + b1 * (p1 - p0) + b2 * (p2 - p0),
-            normal: self.normals[pick.index],
+            position: tri.p0 + b1 * tri.e1 + b2 * tri.e2,
+            normal: tri.normal,
         })
     }
 }
@@ -133,22 +148,24 @@ pub(super) fn mean(c: Vec3) -> f64 {
     (c.x as f64 + c.y as f64 + c.z as f64) / 3.0
 }
 
-/// Solid-angle density (sr⁻¹) at `p` of an area density `pdf_area` (m⁻²) at
-/// the emitter point `y` with unit normal `n`: `pdf_area · r² / |cos θ_light|`
-/// with `r = |y − p|`, computed in `f32` as `pdf_area · r³ / |n · (y − p)|`
-/// (one square root and one division, which overlap the light sample's other
-/// work). Zero when `p` lies in the emitter's plane or on `y`. Callers check
-/// the emitting side.
+/// Solid-angle density (sr⁻¹) at a reference point `p` of an area density
+/// `pdf_area` (m⁻²) at the emitter point `y = p + d` with unit normal `n`:
+/// `pdf_area · r² / |cos θ_light|` with `r = |d|`, computed in `f32` as
+/// `pdf_area · r³ / |n · d|` (one square root and one division, which
+/// overlap the light sample's other work). Zero when `p` lies in the
+/// emitter's plane or on `y`. Callers check the emitting side.
 #[inline(always)]
-pub(super) fn solid_angle_pdf(pdf_area: f32, p: Vec3, y: Vec3, n: Vec3) -> f32 {
-    let d = y - p;
+pub(super) fn solid_angle_pdf(pdf_area: f32, d: Vec3, n: Vec3) -> f32 {
     let dist2 = d.length_squared();
     let pdf = pdf_area * dist2 * dist2.sqrt() / n.dot(d).abs();
     // In the plane or on `y`, `n · d = 0` makes the quotient ∞ or NaN.
     if pdf < f32::INFINITY { pdf } else { 0.0 }
 }
 
-/// Whether `p` sees the emitting (front) side of a surface at `y` with front normal `n`.
-pub(super) fn in_front(p: Vec3, y: Vec3, n: Vec3) -> bool {
-    n.dot(p - y) > 0.0
+/// Whether a reference point `p` sees the emitting (front) side of a surface
+/// with front normal `n` at `y = p + d`: `n · (p − y) > 0`, tested as
+/// `n · d < 0` (the same products negated, so the same outcome).
+#[inline(always)]
+pub(super) fn in_front(d: Vec3, n: Vec3) -> bool {
+    n.dot(d) < 0.0
 }

@@ -7,9 +7,10 @@
 
 use glam::Vec2;
 
-/// Tables with at most this many cumulative entries are searched by a
-/// branch-free count instead of a binary search.
-const LINEAR_SEARCH_MAX: usize = 17;
+/// Distributions of at most this many entries are sampled from a [`Small`]
+/// table (a branch-free count and a resolved pick) instead of a binary search.
+const SMALL_MAX: usize = 16;
+const _: () = assert!(SMALL_MAX.is_power_of_two());
 
 /// A discrete choice: the index, its probability and the uniform number
 /// re-stretched to `[0, 1)` within the chosen entry (reusable for a further
@@ -37,6 +38,85 @@ pub struct Distribution1D {
     /// The only entry of non-zero weight, when there is exactly one (a scene
     /// with one light): sampling then needs no search.
     single: Option<usize>,
+    /// The count-and-pick table of a distribution of at most [`SMALL_MAX`]
+    /// entries (light selection, the triangles of a small emitter).
+    small: Option<Box<Small>>,
+}
+
+/// The sampling table of a distribution of `n ≤ SMALL_MAX` entries. The
+/// entry that `u` selects is found as the count `k` of inner boundaries
+/// `cdf[1..n]` with `cdf[i] ≤ u` (`cdf[0] = 0 ≤ u` and `cdf[n] = 1` need no
+/// test). Padded with +∞ (never `≤ u`) to a fixed length, the sorted
+/// boundaries are counted by a branch-free binary search of `log2 P` steps
+/// (`P ≥ n` the next power of two: one step for two entries, four for 16);
+/// `pick[k]` is the entry count `k` lands in with zero-weight entries skipped
+/// downward, and its cdf bounds, precomputed. So it selects exactly what the
+/// binary search of [`Distribution1D::sample_discrete`] does.
+#[derive(Clone, Debug, PartialEq)]
+struct Small {
+    /// `cdf[1..n]`, then +∞.
+    inner: [f64; SMALL_MAX],
+    /// The pick of each count `k < n` (unused past `n − 1`).
+    pick: [SmallPick; SMALL_MAX],
+    /// `P / 2`, the search's first step (0 for one entry).
+    first_step: usize,
+}
+
+/// The entry a [`Small`] count selects and its cdf bounds.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct SmallPick {
+    /// The entry (of non-zero weight unless entry 0 is the only candidate).
+    index: usize,
+    /// `cdf[index]`.
+    lo: f64,
+    /// `cdf[index + 1]`.
+    hi: f64,
+}
+
+impl Small {
+    /// The table of `func` with normalised cumulative sums `cdf`; `None` for
+    /// more than [`SMALL_MAX`] entries.
+    fn new(func: &[f64], cdf: &[f64]) -> Option<Box<Self>> {
+        let n = func.len();
+        if n > SMALL_MAX {
+            return None;
+        }
+        let mut small = Box::new(Self {
+            inner: [f64::INFINITY; SMALL_MAX],
+            pick: [SmallPick::default(); SMALL_MAX],
+            first_step: n.next_power_of_two() / 2,
+        });
+        small.inner[..n - 1].copy_from_slice(&cdf[1..n]);
+        for (k, pick) in small.pick.iter_mut().enumerate().take(n) {
+            let mut index = k;
+            while func[index] == 0.0 && index > 0 {
+                index -= 1;
+            }
+            *pick = SmallPick {
+                index,
+                lo: cdf[index],
+                hi: cdf[index + 1],
+            };
+        }
+        Some(small)
+    }
+
+    /// The pick for `u ∈ [0, 1]`.
+    #[inline(always)]
+    fn pick(&self, u: f64) -> SmallPick {
+        // Upper bound in the sorted `inner`: after the step of size `s`, `k`
+        // is the count among the first `k + s` boundaries, so after P/2, …,
+        // 2 and 1 it counts all of the first P − 1 ≥ n − 1 (the rest are
+        // +∞). The masks only spare the bounds checks: `k + s − 1 ≤ 14`,
+        // `k ≤ 15`.
+        let mut k = 0;
+        let mut step = self.first_step;
+        while step > 0 {
+            k += step * usize::from(self.inner[(k + step - 1) & (SMALL_MAX - 1)] <= u);
+            step /= 2;
+        }
+        self.pick[k & (SMALL_MAX - 1)]
+    }
 }
 
 impl Distribution1D {
@@ -65,11 +145,13 @@ impl Distribution1D {
             (Some((index, _)), None) => Some(index),
             _ => None,
         };
+        let small = Small::new(&func, &cdf);
         Some(Self {
             func,
             cdf,
             total: acc,
             single,
+            small,
         })
     }
 
@@ -108,28 +190,36 @@ impl Distribution1D {
                 u_remapped: u.min(1.0 - f64::EPSILON),
             };
         }
-        let n = self.func.len();
-        let mut index = if self.cdf.len() <= LINEAR_SEARCH_MAX {
-            // The same index as the binary search below, without its
-            // unpredictable branches (light and triangle selection over a few
-            // entries): `cdf[0] = 0 ≤ u` and `cdf[n] = 1` need no test, so
-            // only the inner boundaries are counted.
-            self.cdf[1..n].iter().map(|&c| usize::from(c <= u)).sum()
-        } else {
-            self.cdf
-                .partition_point(|&c| c <= u)
-                .saturating_sub(1)
-                .min(n - 1)
+        let SmallPick { index, lo, hi } = match &self.small {
+            Some(small) => small.pick(u),
+            None => self.search(u),
         };
-        while self.func[index] == 0.0 && index > 0 {
-            index -= 1;
-        }
-        let (lo, hi) = (self.cdf[index], self.cdf[index + 1]);
         let u_remapped = ((u - lo) / (hi - lo)).clamp(0.0, 1.0 - f64::EPSILON);
         DiscreteSample {
             index,
             pmf: hi - lo,
             u_remapped,
+        }
+    }
+
+    /// The entry `u ∈ [0, 1]` selects by binary search over the cdf (the
+    /// entry `i` with `cdf[i] ≤ u < cdf[i + 1]`, zero-weight entries skipped
+    /// downward) and its cdf bounds.
+    #[inline(always)]
+    fn search(&self, u: f64) -> SmallPick {
+        let n = self.func.len();
+        let mut index = self
+            .cdf
+            .partition_point(|&c| c <= u)
+            .saturating_sub(1)
+            .min(n - 1);
+        while self.func[index] == 0.0 && index > 0 {
+            index -= 1;
+        }
+        SmallPick {
+            index,
+            lo: self.cdf[index],
+            hi: self.cdf[index + 1],
         }
     }
 
@@ -238,6 +328,36 @@ mod tests {
         assert_eq!(d.sample_discrete(0.3).index, 3);
         assert!((d.pmf(3) - 0.75).abs() < 1e-12);
         assert!(Distribution1D::new(&[0.0, 0.0]).is_none());
+    }
+
+    #[test]
+    fn small_tables_pick_what_the_binary_search_picks() {
+        let mut rng = epsm_testkit::Rng::new(17);
+        let mut small = 0;
+        for n in 1..=SMALL_MAX + 2 {
+            for _ in 0..40 {
+                // Zero weights (leading, trailing, runs) in about a third.
+                let weights: Vec<f64> = (0..n)
+                    .map(|_| {
+                        let w = rng.f64();
+                        if w < 0.35 { 0.0 } else { w }
+                    })
+                    .collect();
+                let Some(d) = Distribution1D::new(&weights) else {
+                    continue;
+                };
+                assert_eq!(d.small.is_some(), n <= SMALL_MAX);
+                small += usize::from(d.small.is_some());
+                let bounds = d.cdf.iter().flat_map(|&c| [c, c.next_down(), c.next_up()]);
+                let uniform = (0..200).map(|_| rng.f64());
+                for u in bounds.chain(uniform).map(|u| u.clamp(0.0, 1.0)) {
+                    if let Some(small) = &d.small {
+                        assert_eq!(small.pick(u), d.search(u), "{weights:?} at {u}");
+                    }
+                }
+            }
+        }
+        assert!(small > 400, "only {small} small tables");
     }
 
     #[test]

@@ -95,15 +95,15 @@ impl LightTable {
         let n_area = self.area.len();
         if let Some(emitter) = self.area.get(pick.index) {
             let y = emitter.sample(pick.u_remapped, u)?;
-            if !in_front(p, y.position, y.normal) {
+            let d = y.position - p;
+            if !in_front(d, y.normal) {
                 return None;
             }
             let pdf_area = (pick.pmf * emitter.pdf_area()) as f32;
-            let pdf = solid_angle_pdf(pdf_area, p, y.position, y.normal);
+            let pdf = solid_angle_pdf(pdf_area, d, y.normal);
             if pdf <= 0.0 {
                 return None;
             }
-            let d = y.position - p;
             let dist = d.length();
             return Some(LightSample {
                 wo: d / dist,
@@ -158,11 +158,12 @@ impl LightTable {
             return 0.0;
         };
         let emitter = &self.area[index as usize];
-        if !in_front(p, y, emitter.normal(triangle)) {
+        let d = y - p;
+        if !in_front(d, emitter.normal(triangle)) {
             return 0.0;
         }
         let pdf_area = (self.select_pmf(index as usize) * emitter.pdf_area()) as f32;
-        solid_angle_pdf(pdf_area, p, y, n)
+        solid_angle_pdf(pdf_area, d, n)
     }
 
     /// Solid-angle pdf (selection included) of sampling background direction `dir`.

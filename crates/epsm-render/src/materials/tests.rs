@@ -273,3 +273,34 @@ fn zero_roughness_is_clamped_instead_of_producing_nan() {
     );
     assert!(m.eval(wi, s.wo, Vec2::ZERO).is_finite());
 }
+
+#[test]
+fn material_local_directions_give_the_same_results_as_the_full_frame() {
+    let mut rng = Rng::new(7);
+    let mut all = non_delta_materials();
+    all.push((
+        "mirror".into(),
+        material(Bsdf::Conductor(Conductor { tint: Vec3::ONE }), true),
+    ));
+    all.push((
+        "glass".into(),
+        material(Bsdf::Dielectric(Dielectric { ior: 1.5 }), false),
+    ));
+    for (name, m) in all {
+        for _ in 0..500 {
+            let frame = Frame::from_normal(rng.sphere());
+            let (wi, wo) = (rng.sphere(), rng.sphere());
+            let (wi_m, wo_m) = (m.to_local(&frame, wi), m.to_local(&frame, wo));
+            let (wi_f, wo_f) = (frame.to_local(wi), frame.to_local(wo));
+            let uv = rng.vec2();
+            assert_eq!(m.eval(wi_m, wo_m, uv), m.eval(wi_f, wo_f, uv), "{name}");
+            assert_eq!(m.pdf(wi_m, wo_m, uv), m.pdf(wi_f, wo_f, uv), "{name}");
+            let (u_lobe, u) = (rng.f32(), rng.vec2());
+            assert_eq!(
+                m.sample(wi_m, uv, u_lobe, u),
+                m.sample(wi_f, uv, u_lobe, u),
+                "{name}"
+            );
+        }
+    }
+}

@@ -9,7 +9,7 @@
 //!
 //! Random dimensions: the film position uses dimensions 0–1; bounce `k`
 //! (0-based) uses the block `2 + 8k …`: light selection, light position (2),
-//! lobe choice, direction (2), Russian roulette.
+//! lobe choice, direction (2), Russian roulette (the `DIM_*` offsets).
 
 use std::time::Instant;
 
@@ -32,6 +32,20 @@ use crate::scene::Scene;
 /// Side of the square tiles rendered by one task.
 pub const TILE: u32 = 16;
 const DIMS_PER_BOUNCE: u32 = 8;
+/// The dimension of the film position (two numbers).
+const DIM_FILM: u32 = 0;
+/// The first dimension of bounce 0's block.
+const DIM_FIRST_BOUNCE: u32 = 2;
+/// Offsets in a bounce's block: light selection.
+const DIM_LIGHT_SELECT: u32 = 0;
+/// Light position (two numbers).
+const DIM_LIGHT: u32 = 1;
+/// Lobe choice.
+const DIM_LOBE: u32 = 3;
+/// Direction (two numbers).
+const DIM_DIRECTION: u32 = 4;
+/// Russian roulette.
+const DIM_ROULETTE: u32 = 6;
 /// Shadow rays stop this fraction short of the light point (relative, so it
 /// works at any scene scale).
 const SHADOW_EPS: f32 = 1e-4;
@@ -331,8 +345,8 @@ fn trace_pixel_sample(
     counters: &mut TraceCounters,
     boxes: impl BoxTest,
 ) -> Vec3 {
-    let mut sampler = keys.sampler(sample);
-    let film = pixel.as_vec2() + sampler.next_2d();
+    let sampler = keys.sampler(sample);
+    let film = pixel.as_vec2() + sampler.get_2d(DIM_FILM);
     let ray = film_rays.ray(film);
     let mut rec = record.map(|(level, rec)| {
         *rec = PathRecord {
@@ -347,15 +361,7 @@ fn trace_pixel_sample(
             done: false,
         }
     });
-    let l = trace_path(
-        scene,
-        opts,
-        ray,
-        &mut sampler,
-        rec.as_mut(),
-        counters,
-        boxes,
-    );
+    let l = trace_path(scene, opts, ray, &sampler, rec.as_mut(), counters, boxes);
     let l = if l.is_finite() {
         l
     } else {

@@ -3,7 +3,10 @@
 
 use glam::Vec3;
 
-use super::{DIMS_PER_BOUNCE, RenderOptions, SHADOW_EPS, TraceCounters};
+use super::{
+    DIM_DIRECTION, DIM_FIRST_BOUNCE, DIM_LIGHT, DIM_LIGHT_SELECT, DIM_LOBE, DIM_ROULETTE,
+    DIMS_PER_BOUNCE, RenderOptions, SHADOW_EPS, TraceCounters,
+};
 use crate::bvh::BoxTest;
 use crate::frame::Frame;
 use crate::hit::SurfacePoint;
@@ -12,7 +15,7 @@ use crate::ray::{Ray, offset_origin};
 use crate::record::{
     ConnectionRecord, OccluderRecord, PathRecord, RecordLevel, TrianglePoint, VertexRecord,
 };
-use crate::sampler::PixelSampler;
+use crate::sampler::{Block, PixelSampler};
 use crate::scene::Scene;
 
 /// The recording state of one path.
@@ -38,7 +41,7 @@ pub(super) fn trace_path(
     scene: &Scene,
     opts: &RenderOptions,
     mut ray: Ray,
-    sampler: &mut PixelSampler<'_>,
+    sampler: &PixelSampler<'_>,
     mut rec: Option<&mut Recording<'_>>,
     counters: &mut TraceCounters,
     boxes: impl BoxTest,
@@ -54,8 +57,7 @@ pub(super) fn trace_path(
     let mut prev: Option<(Vec3, f32)> = None;
 
     for depth in 0..opts.max_depth {
-        let dims = 2 + depth * DIMS_PER_BOUNCE;
-        sampler.set_dimension(dims);
+        let numbers = sampler.block(DIM_FIRST_BOUNCE + depth * DIMS_PER_BOUNCE);
         counters.rays += 1;
 
         // Find the next vertex; rays that leave see the background.
@@ -77,11 +79,13 @@ pub(super) fn trace_path(
         // Camera and continuation rays are unit (sampled directions mapped by
         // an orthonormal frame): no renormalisation.
         let wi_world = -ray.dir;
+        // Its cosine with the geometric normal, for the side tests.
+        let wi_ng = wi_world.dot(sp.ng);
         let mut contribution = Vec3::ZERO;
 
         // Emission hit by BSDF sampling (front face only).
         if let Some(le) = object.emission
-            && sp.ng.dot(wi_world) > 0.0
+            && wi_ng > 0.0
         {
             let w = prev.map_or(1.0, |(p_prev, pdf)| {
                 mis(
@@ -92,8 +96,8 @@ pub(super) fn trace_path(
             contribution += beta * le * w;
         }
 
-        let frame = Frame::from_normal(sp.ns);
-        let wi = frame.to_local(wi_world);
+        let frame = sp.frame;
+        let wi = material.to_local(&frame, wi_world);
         let kind = material.vertex_kind();
 
         // Next-event estimation toward a light.
@@ -105,27 +109,27 @@ pub(super) fn trace_path(
             sp: &sp,
             frame: &frame,
             wi,
-            wi_world,
+            wi_ng,
             material,
         };
-        let nee = next_event(scene, &shading, beta, sampler, record_at, counters, boxes);
+        let nee = next_event(scene, &shading, beta, &numbers, record_at, counters, boxes);
         contribution += nee.contribution;
         let connection = nee.connection;
         radiance += contribution;
 
-        // Sample the BSDF to continue (dimensions 3–5 of the bounce's block,
-        // whether or not next-event estimation drew its three).
-        sampler.set_dimension(dims + 3);
-        let u_lobe = sampler.next_1d();
-        let u_dir = sampler.next_2d();
+        // Sample the BSDF to continue (whether or not next-event estimation
+        // drew its three numbers).
+        let u_lobe = numbers.get_1d(DIM_LOBE);
+        let u_dir = numbers.get_2d(DIM_DIRECTION);
         let sample = material.sample(wi, sp.uv, u_lobe, u_dir);
         let mut next = None;
         if let Some(bs) = sample {
             let wo_world = frame.to_world(bs.wo);
+            let wo_ng = wo_world.dot(sp.ng);
             let reflect = !bs.lobe.is_transmission();
-            let same_side = wo_world.dot(sp.ng) * wi_world.dot(sp.ng) > 0.0;
+            let same_side = wo_ng * wi_ng > 0.0;
             if same_side == reflect {
-                next = Some((bs, wo_world));
+                next = Some((bs, wo_world, wo_ng));
             } else {
                 counters.leaks += 1;
             }
@@ -138,7 +142,7 @@ pub(super) fn trace_path(
                 b1: hit.b1,
                 b2: hit.b2,
             };
-            let (lobe, eta, m) = next.map_or((None, 1.0, sp.ns), |(bs, _)| {
+            let (lobe, eta, m) = next.map_or((None, 1.0, sp.ns), |(bs, _, _)| {
                 (Some(bs.lobe), bs.eta, frame.to_world(bs.m))
             });
             r.rec.vertices.push(VertexRecord {
@@ -161,23 +165,21 @@ pub(super) fn trace_path(
             };
         }
 
-        let Some((bs, wo_world)) = next else { break };
+        let Some((bs, wo_world, wo_ng)) = next else {
+            break;
+        };
         beta *= bs.weight;
         if bs.lobe.is_transmission() {
             eta_scale *= bs.eta * bs.eta;
         }
         prev = Some((sp.p, bs.pdf)).filter(|_| !bs.lobe.is_delta());
-        let side = if wo_world.dot(sp.ng) >= 0.0 {
-            sp.ng
-        } else {
-            -sp.ng
-        };
+        let side = if wo_ng >= 0.0 { sp.ng } else { -sp.ng };
         ray = Ray::new(offset_origin(sp.p, side), wo_world);
 
         // Russian roulette on the throughput with radiance scaling undone.
         if depth + 1 >= opts.rr_depth {
             let q = (beta.max_element() * eta_scale).min(0.95);
-            if q <= 0.0 || sampler.next_1d() >= q {
+            if q <= 0.0 || numbers.get_1d(DIM_ROULETTE) >= q {
                 break;
             }
             beta /= q;
@@ -193,10 +195,11 @@ pub(super) fn trace_path(
 struct Shading<'a> {
     sp: &'a SurfacePoint,
     frame: &'a Frame,
-    /// Direction toward the previous vertex, local frame.
+    /// Direction toward the previous vertex, local frame (as far as the
+    /// material reads it: [`Material::to_local`]).
     wi: Vec3,
-    /// The same, world space.
-    wi_world: Vec3,
+    /// `wi · ng` in world space: its cosine with the geometric normal.
+    wi_ng: f32,
     material: &'a Material,
 }
 
@@ -209,14 +212,14 @@ struct NextEvent {
 }
 
 /// Samples a light, evaluates the BSDF toward it, MIS-weights against BSDF
-/// sampling and traces the shadow ray (box tests by `boxes`). Consumes three
-/// random numbers, none at a delta vertex.
+/// sampling and traces the shadow ray (box tests by `boxes`). Draws three
+/// random numbers of the bounce's block `numbers`, none at a delta vertex.
 #[inline(always)]
 fn next_event(
     scene: &Scene,
     at: &Shading<'_>,
     beta: Vec3,
-    sampler: &mut PixelSampler<'_>,
+    numbers: &Block<'_>,
     record_at: Option<u32>,
     counters: &mut TraceCounters,
     boxes: impl BoxTest,
@@ -228,14 +231,15 @@ fn next_event(
     if at.material.is_delta() {
         return out;
     }
-    let u_select = sampler.next_1d();
-    let u_light = sampler.next_2d();
+    let u_select = numbers.get_1d(DIM_LIGHT_SELECT);
+    let u_light = numbers.get_2d(DIM_LIGHT);
     let Some(ls) = scene.lights().sample(at.sp.p, u_select, u_light) else {
         return out;
     };
-    let wo = at.frame.to_local(ls.wo);
+    let wo = at.material.to_local(at.frame, ls.wo);
     let f = at.material.eval(at.wi, wo, at.sp.uv);
-    let same_side = ls.wo.dot(at.sp.ng) * at.wi_world.dot(at.sp.ng) > 0.0;
+    let wo_ng = ls.wo.dot(at.sp.ng);
+    let same_side = wo_ng * at.wi_ng > 0.0;
     if f == Vec3::ZERO || !same_side || ls.pdf <= 0.0 {
         return out;
     }
@@ -245,7 +249,7 @@ fn next_event(
         mis(ls.pdf, at.material.pdf(at.wi, wo, at.sp.uv))
     };
     let unoccluded = beta * f * ls.radiance * (w / ls.pdf);
-    let shadow = shadow_ray(at.sp, ls.wo, ls.position, ls.dist);
+    let shadow = shadow_ray(at.sp, ls.wo, wo_ng, ls.position, ls.dist);
     counters.shadow_rays += 1;
     let blocked = scene.accel().occluded_with(&shadow, boxes);
     if !blocked {
@@ -264,9 +268,9 @@ fn next_event(
 }
 
 /// The shadow ray from surface point `sp` toward a light point `y` (or along
-/// `wo` for the background when `dist` is infinite).
-fn shadow_ray(sp: &SurfacePoint, wo: Vec3, y: Vec3, dist: f32) -> Ray {
-    let side = if wo.dot(sp.ng) >= 0.0 { sp.ng } else { -sp.ng };
+/// `wo` for the background when `dist` is infinite); `wo_ng = wo · ng`.
+fn shadow_ray(sp: &SurfacePoint, wo: Vec3, wo_ng: f32, y: Vec3, dist: f32) -> Ray {
+    let side = if wo_ng >= 0.0 { sp.ng } else { -sp.ng };
     let origin = offset_origin(sp.p, side);
     if dist.is_finite() {
         Ray {
