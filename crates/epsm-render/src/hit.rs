@@ -48,13 +48,20 @@ pub struct SurfacePoint {
     /// Unit geometric normal, world space (front face by winding; flipped into
     /// the shading normal's hemisphere when the mesh has vertex normals).
     pub ng: Vec3,
-    /// Unit shading normal, world space.
-    pub ns: Vec3,
     /// Texture coordinates.
     pub uv: Vec2,
-    /// The shading frame around `ns`, `Frame::from_normal(ns)` (made once per
-    /// triangle in the static shading table where `ns` is constant).
+    /// The shading frame, world space: `Frame::from_normal` of the unit
+    /// shading normal `frame.n` ([`SurfacePoint::ns`]; made once per triangle
+    /// in the static shading table where that normal is constant).
     pub frame: Frame,
+}
+
+impl SurfacePoint {
+    /// Unit shading normal, world space (the frame's normal).
+    #[inline(always)]
+    pub fn ns(&self) -> Vec3 {
+        self.frame.n
+    }
 }
 
 /// An object's placement in `f32`: the world transform and the matrix that
@@ -132,7 +139,6 @@ pub(crate) fn surface_point(
     SurfacePoint {
         p,
         ng,
-        ns,
         uv,
         frame: Frame::from_normal(ns),
     }

@@ -26,7 +26,7 @@ fn surface_points_are_unit_consistent_and_on_the_ray() {
         };
         let object = &objects[hit.object as usize];
         let sp = accel.surface_point(&objects, &hit);
-        assert!((sp.ng.length() - 1.0).abs() < 1e-5 && (sp.ns.length() - 1.0).abs() < 1e-5);
+        assert!((sp.ng.length() - 1.0).abs() < 1e-5 && (sp.ns().length() - 1.0).abs() < 1e-5);
         assert!(
             sp.p.distance(ray.at(hit.t)) < 1e-4 * (1.0 + hit.t),
             "{sp:?} off the ray"
@@ -39,12 +39,12 @@ fn surface_points_are_unit_consistent_and_on_the_ray() {
             let mapped = w.matrix3.inverse().transpose() * (p1 - p0).cross(p2 - p0);
             let expected = (mirror * mapped).normalize().as_vec3();
             assert!(sp.ng.distance(expected) < 1e-4, "{sp:?} vs {expected}");
-            assert_eq!(sp.ns, sp.ng);
+            assert_eq!(sp.ns(), sp.ng);
             assert_eq!(sp.uv, Vec2::new(hit.b1, hit.b2));
             checked[0] += 1;
         } else {
             assert!(
-                sp.ng.dot(sp.ns) >= 0.0,
+                sp.ng.dot(sp.ns()) >= 0.0,
                 "ng not in the shading hemisphere: {sp:?}"
             );
             // The grid's uvs map its x and z from [-1, 1] to [0, 1].
@@ -160,7 +160,7 @@ fn accel_surface_point_matches_f64_side() {
     let exact = surface_point_f64(&obj, hit.triangle, hit.b1 as f64, hit.b2 as f64);
     let near = |a: Vec3, b: DVec3| a.as_dvec3().distance(b) < 1e-5;
     assert!(
-        near(sp.p, exact.p) && near(sp.ng, exact.ng) && near(sp.ns, exact.ns),
+        near(sp.p, exact.p) && near(sp.ng, exact.ng) && near(sp.ns(), exact.ns),
         "{sp:?} vs {exact:?}"
     );
 }
@@ -188,12 +188,12 @@ fn static_table_and_instance_placement_agree() {
         let a = statics.surface_point(&objects, &hit);
         let b = mixed.surface_point(&objects, &hit);
         // Each path's frame is the one made from its shading normal.
-        assert_eq!(a.frame, Frame::from_normal(a.ns));
-        assert_eq!(b.frame, Frame::from_normal(b.ns));
+        assert_eq!(a.frame, Frame::from_normal(a.ns()));
+        assert_eq!(b.frame, Frame::from_normal(b.ns()));
         assert!(
             a.p.distance(b.p) < 1e-4 * (1.0 + hit.t)
                 && a.ng.distance(b.ng) < 1e-4
-                && a.ns.distance(b.ns) < 1e-4
+                && a.ns().distance(b.ns()) < 1e-4
                 && a.uv.distance(b.uv) < 1e-5,
             "{a:?} vs {b:?}"
         );

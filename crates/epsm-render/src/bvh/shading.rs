@@ -120,12 +120,6 @@ impl ShadingTriangle {
             Some(uvs) => hit::interpolate_uv(uvs, b1, b2),
             None => Vec2::new(b1, b2),
         };
-        SurfacePoint {
-            p,
-            ng,
-            ns: frame.n,
-            uv,
-            frame,
-        }
+        SurfacePoint { p, ng, uv, frame }
     }
 }

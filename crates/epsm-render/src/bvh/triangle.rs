@@ -59,9 +59,7 @@ impl RayShear {
             kz_col: [-(d[kx & 3] * sz), -(d[ky & 3] * sz), sz],
         }
     }
-}
 
-impl RayShear {
     /// The axes `[kx, ky, kz]`, each below 3.
     #[inline(always)]
     pub fn axes(&self) -> [usize; 3] {

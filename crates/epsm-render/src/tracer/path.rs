@@ -8,7 +8,6 @@ use super::{
     DIMS_PER_BOUNCE, RenderOptions, SHADOW_EPS, TraceCounters,
 };
 use crate::bvh::BoxTest;
-use crate::frame::Frame;
 use crate::hit::SurfacePoint;
 use crate::materials::{Material, VertexKind};
 use crate::ray::{Ray, offset_origin};
@@ -96,8 +95,8 @@ pub(super) fn trace_path(
             contribution += beta * le * w;
         }
 
-        let frame = sp.frame;
-        let wi = material.to_local(&frame, wi_world);
+        let frame = &sp.frame;
+        let wi = material.to_local(frame, wi_world);
         let kind = material.vertex_kind();
 
         // Next-event estimation toward a light.
@@ -107,7 +106,6 @@ pub(super) fn trace_path(
             .map(|r| r.rec.vertices.len() as u32);
         let shading = Shading {
             sp: &sp,
-            frame: &frame,
             wi,
             wi_ng,
             material,
@@ -142,14 +140,14 @@ pub(super) fn trace_path(
                 b1: hit.b1,
                 b2: hit.b2,
             };
-            let (lobe, eta, m) = next.map_or((None, 1.0, sp.ns), |(bs, _, _)| {
+            let (lobe, eta, m) = next.map_or((None, 1.0, sp.ns()), |(bs, _, _)| {
                 (Some(bs.lobe), bs.eta, frame.to_world(bs.m))
             });
             r.rec.vertices.push(VertexRecord {
                 at,
                 p: sp.p,
                 ng: sp.ng,
-                ns: sp.ns,
+                ns: sp.ns(),
                 kind,
                 lobe,
                 eta,
@@ -194,7 +192,6 @@ pub(super) fn trace_path(
 /// A shading point as next-event estimation sees it.
 struct Shading<'a> {
     sp: &'a SurfacePoint,
-    frame: &'a Frame,
     /// Direction toward the previous vertex, local frame (as far as the
     /// material reads it: [`Material::to_local`]).
     wi: Vec3,
@@ -236,7 +233,7 @@ fn next_event(
     let Some(ls) = scene.lights().sample(at.sp.p, u_select, u_light) else {
         return out;
     };
-    let wo = at.material.to_local(at.frame, ls.wo);
+    let wo = at.material.to_local(&at.sp.frame, ls.wo);
     let f = at.material.eval(at.wi, wo, at.sp.uv);
     let wo_ng = ls.wo.dot(at.sp.ng);
     let same_side = wo_ng * at.wi_ng > 0.0;

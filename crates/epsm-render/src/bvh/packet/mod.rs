@@ -241,18 +241,18 @@ fn closest<const N: usize>(mut mask: u32, t: &[f32; N]) -> usize {
     lane
 }
 
-/// The edge functions `[u, v, w]` (per lane) with those of the lanes in
-/// `lanes` recomputed in `f64` from the sheared vertices `[a, b, c]` (each
-/// `[x, y]`, per lane).
+/// The edge functions `[u, v, w]` of a half (per lane) with those of the
+/// lanes in `lanes` recomputed in `f64` from the sheared vertices `[a, b, c]`
+/// (each `[x, y]`, per lane).
 #[cold]
 #[inline(never)]
-fn edges_f64<const N: usize>(
+fn edges_f64(
     lanes: u32,
-    [a, b, c]: [[[f32; N]; 2]; 3],
-    mut uvw: [[f32; N]; 3],
-) -> [[f32; N]; 3] {
-    for lane in (0..N).filter(|&l| lanes & (1 << l) != 0) {
-        let edge64 = |p: &[[f32; N]; 2], q: &[[f32; N]; 2]| {
+    [a, b, c]: [[[f32; HALF]; 2]; 3],
+    mut uvw: [[f32; HALF]; 3],
+) -> [[f32; HALF]; 3] {
+    for lane in (0..HALF).filter(|&l| lanes & (1 << l) != 0) {
+        let edge64 = |p: &[[f32; HALF]; 2], q: &[[f32; HALF]; 2]| {
             (f64::from(p[0][lane]) * f64::from(q[1][lane])
                 - f64::from(p[1][lane]) * f64::from(q[0][lane])) as f32
         };
