@@ -87,7 +87,7 @@ fn default_fov() -> f64 {
 pub struct RenderDesc {
     /// Samples per pixel, ≥ 1.
     pub spp: u32,
-    /// Maximum number of surface interactions, in [1, 1024].
+    /// Maximum number of scatterings per path, in [1, 1024].
     pub max_depth: u32,
     /// Depth at which Russian roulette starts, ≥ 1.
     pub rr_depth: u32,

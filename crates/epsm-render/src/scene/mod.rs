@@ -53,14 +53,15 @@ pub struct Object {
 /// | key | unit | default | range |
 /// |---|---|---|---|
 /// | `spp` | samples per pixel | 16 | ≥ 1 |
-/// | `max_depth` | path vertices after the camera | 8 | ≥ 1 |
+/// | `max_depth` | scatterings per path (the vertex the last one reaches still adds its emission) | 8 | ≥ 1 |
 /// | `rr_depth` | depth from which Russian roulette runs | 3 | ≥ 1 |
 /// | `seed` | — | 0 | any `u64`... stored as `u32` |
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct RenderSettings {
     /// Samples per pixel.
     pub spp: u32,
-    /// Maximum number of surface interactions on a path.
+    /// Maximum number of scatterings on a path (the vertex the last one
+    /// reaches still adds its emission, or the background).
     pub max_depth: u32,
     /// Depth at which Russian roulette starts.
     pub rr_depth: u32,

@@ -57,7 +57,8 @@ pub struct RenderOptions {
     pub spp: u32,
     /// Seed of the random streams.
     pub seed: u32,
-    /// Maximum surface interactions per path.
+    /// Maximum scatterings per path (the vertex the last one reaches still
+    /// adds its emission, or the background).
     pub max_depth: u32,
     /// Depth from which Russian roulette runs.
     pub rr_depth: u32,

@@ -55,7 +55,12 @@ pub(super) fn trace_path(
     // (`None` when that was a delta lobe or the camera: no MIS).
     let mut prev: Option<(Vec3, f32)> = None;
 
-    for depth in 0..opts.max_depth {
+    // A path scatters at most `max_depth` times; the vertex its last
+    // scattering reaches still adds what it emits (or the background seen),
+    // so both strategies of that scattering's direct light are counted, as
+    // their MIS weights assume (pbrt-v4's and Mitsuba 3's depth rule).
+    for depth in 0..=opts.max_depth {
+        let scatters = depth < opts.max_depth;
         let numbers = sampler.block(DIM_FIRST_BOUNCE + depth * DIMS_PER_BOUNCE);
         counters.rays += 1;
 
@@ -110,7 +115,11 @@ pub(super) fn trace_path(
             wi_ng,
             material,
         };
-        let nee = next_event(scene, &shading, beta, &numbers, record_at, counters, boxes);
+        let nee = if scatters {
+            next_event(scene, &shading, beta, &numbers, record_at, counters, boxes)
+        } else {
+            NextEvent::NONE
+        };
         contribution += nee.contribution;
         let connection = nee.connection;
         radiance += contribution;
@@ -119,7 +128,9 @@ pub(super) fn trace_path(
         // drew its three numbers).
         let u_lobe = numbers.get_1d(DIM_LOBE);
         let u_dir = numbers.get_2d(DIM_DIRECTION);
-        let sample = material.sample(wi, sp.uv, u_lobe, u_dir);
+        let sample = scatters
+            .then(|| material.sample(wi, sp.uv, u_lobe, u_dir))
+            .flatten();
         let mut next = None;
         if let Some(bs) = sample {
             let wo_world = frame.to_world(bs.wo);
@@ -208,6 +219,14 @@ struct NextEvent {
     connection: Option<ConnectionRecord>,
 }
 
+impl NextEvent {
+    /// Nothing added, no connection.
+    const NONE: Self = Self {
+        contribution: Vec3::ZERO,
+        connection: None,
+    };
+}
+
 /// Samples a light, evaluates the BSDF toward it, MIS-weights against BSDF
 /// sampling and traces the shadow ray (box tests by `boxes`). Draws three
 /// random numbers of the bounce's block `numbers`, none at a delta vertex.
@@ -221,10 +240,7 @@ fn next_event(
     counters: &mut TraceCounters,
     boxes: impl BoxTest,
 ) -> NextEvent {
-    let mut out = NextEvent {
-        contribution: Vec3::ZERO,
-        connection: None,
-    };
+    let mut out = NextEvent::NONE;
     if at.material.is_delta() {
         return out;
     }

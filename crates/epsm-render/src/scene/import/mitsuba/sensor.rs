@@ -8,7 +8,7 @@
 //! | sensor `to_world` | origin, view direction `+z`, up `+y` | identity; a mirroring transform is an error |
 //! | `film` `width`, `height` | resolution | 768 × 576 |
 //! | `sampler` `sample_count`, `seed` | `spp`, `seed` | 4, 0; the sampler type only changes the noise |
-//! | `integrator type="path"` `max_depth` | `max_depth = max_depth − 1` (epsm counts surface interactions, Mitsuba path segments) | −1 = unlimited → `MAX_DEPTH` |
+//! | `integrator type="path"` `max_depth` | `max_depth = max_depth − 1` (epsm counts scatterings, Mitsuba path segments) | −1 = unlimited → `MAX_DEPTH` |
 //! | `integrator` `rr_depth` | `rr_depth` (same meaning) | 5 |
 //!
 //! `near_clip`, `far_clip` and film settings that only affect the output
