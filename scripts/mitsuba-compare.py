@@ -1,0 +1,254 @@
+#!/usr/bin/env python3
+"""Side by side with Mitsuba 3: renders epsm scene files with `epsm bench render`
+and with Mitsuba 3's LLVM backend (`llvm_ad_rgb`) on the same machine, and prints a
+Markdown table of samples per second and of the two images' mean colours.
+
+Usage (from the repository root, after `cargo build --release`):
+
+    python3 -m venv /tmp/mi && /tmp/mi/bin/pip install mitsuba==3.6.4 numpy
+    /tmp/mi/bin/python scripts/mitsuba-compare.py [SCENE.toml ...] \
+        [--epsm target/release/epsm] [--spp 256] [--rounds 3] [--threads 1,2]
+
+Default scenes: every `scenes/*.toml`. Mitsuba's backend needs `libLLVM` (Debian:
+`libllvm15`). Each round runs epsm's bench, then Mitsuba once per thread count
+(`drjit.set_thread_count`); Mitsuba's first render of a scene compiles its kernel,
+so every Mitsuba timing is the best of two renders after a warm-up render. Rounds
+alternate the two renderers, so compare rates within a round on a shared machine.
+
+The translation covers what the shipped scenes use and refuses the rest (mesh
+files, textures, environment maps): the camera (`fov_axis = y`), `[render]`
+`max_depth` (Mitsuba counts path segments: epsm's `max_depth` + 1) and `rr_depth`,
+built-in shapes with the same geometry (rectangles and cubes are Mitsuba's own
+meshes; epsm's icospheres and disk fans are written as PLY meshes), transforms in
+epsm's order (scale, rotations in list order, translation), `diffuse`,
+`dielectric` (exterior IOR 1), `conductor` and `rough_conductor` (Mitsuba's
+`material = none`, so the Fresnel term is 1, times `specular_reflectance = tint`;
+GGX with visible-normal sampling), `two_sided` (`twosided`), emissive objects
+(`area`), point lights and a constant background (`constant`). Mitsuba's
+`independent` sampler and box filter stand in for epsm's stratified samples and
+box pixels: both estimate the same image, which the mean-colour columns check.
+"""
+import argparse
+import json
+import math
+import pathlib
+import subprocess
+import sys
+import tempfile
+import time
+import tomllib
+
+import drjit as dr
+import mitsuba as mi
+import numpy as np
+
+mi.set_variant("llvm_ad_rgb")
+T = mi.ScalarTransform4f
+
+PLY_DIR = pathlib.Path(tempfile.mkdtemp(prefix="epsm-mitsuba-"))
+
+
+def icosphere(levels):
+    """epsm's `sphere`: the icosahedron subdivided `levels` times (scene/shapes.rs)."""
+    t = (1.0 + 5.0**0.5) / 2.0
+    corners = [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t),
+               (0, -1, -t), (0, 1, -t), (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]
+    pos = [np.array(p, dtype=np.float32) / np.float32(np.linalg.norm(p)) for p in corners]
+    faces = [[0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11], [1, 5, 9], [5, 11, 4],
+             [11, 10, 2], [10, 7, 6], [7, 1, 8], [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8],
+             [3, 8, 9], [4, 9, 5], [2, 4, 11], [6, 2, 10], [8, 6, 7], [9, 8, 1]]
+    for _ in range(levels):
+        mid = {}
+
+        def midpoint(a, b):
+            key = (min(a, b), max(a, b))
+            if key not in mid:
+                p = pos[a] + pos[b]
+                pos.append(p / np.float32(np.linalg.norm(p)))
+                mid[key] = len(pos) - 1
+            return mid[key]
+
+        nxt = []
+        for a, b, c in faces:
+            ab, bc, ca = midpoint(a, b), midpoint(b, c), midpoint(c, a)
+            nxt += [[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]
+        faces = nxt
+    p = np.array(pos, dtype=np.float32)
+    return p, p, np.array(faces, dtype=np.uint32)
+
+
+def disk(segments):
+    """epsm's `disk`: a fan of `segments` triangles around the centre, facing +z."""
+    phi = 2.0 * np.pi * np.arange(segments) / segments
+    p = np.zeros((segments + 1, 3), dtype=np.float32)
+    p[1:, 0], p[1:, 1] = np.cos(phi), np.sin(phi)
+    n = np.tile(np.array([0, 0, 1], dtype=np.float32), (segments + 1, 1))
+    i = np.arange(segments, dtype=np.uint32)
+    faces = np.stack([np.zeros_like(i), 1 + i, 1 + (i + 1) % segments], axis=1)
+    return p, n, faces
+
+
+def ply(name, positions, normals, faces):
+    path = PLY_DIR / f"{name}.ply"
+    if not path.exists():
+        mesh = mi.Mesh(name, vertex_count=len(positions), face_count=len(faces),
+                       has_vertex_normals=True)
+        params = mi.traverse(mesh)
+        params["vertex_positions"] = mi.Float(positions.ravel())
+        params["vertex_normals"] = mi.Float(normals.ravel())
+        params["faces"] = mi.UInt32(faces.ravel())
+        params.update()
+        mesh.write_ply(str(path))
+    return str(path)
+
+
+def refuse(scene, what):
+    sys.exit(f"{scene}: {what} is not translated to Mitsuba by this script")
+
+
+def to_world(obj):
+    m = T().translate(obj.get("translate", [0.0, 0.0, 0.0]))
+    for r in reversed(obj.get("rotate", [])):
+        m = m @ T().rotate(r["axis"], r["angle"])
+    s = obj.get("scale", 1.0)
+    return m @ T().scale(s if isinstance(s, list) else [s, s, s])
+
+
+def bsdf(scene, mat):
+    kind = mat["type"]
+    if "texture" in mat:
+        refuse(scene, "a texture")
+    if kind == "diffuse":
+        b = {"type": "diffuse", "reflectance": {"type": "rgb", "value": mat.get("albedo", [0.5] * 3)}}
+    elif kind == "dielectric":
+        return {"type": "dielectric", "int_ior": mat.get("ior", 1.5), "ext_ior": 1.0}
+    elif kind == "conductor":
+        b = {"type": "conductor", "material": "none",
+             "specular_reflectance": {"type": "rgb", "value": mat.get("tint", [1.0] * 3)}}
+    elif kind == "rough_conductor":
+        b = {"type": "roughconductor", "material": "none", "distribution": "ggx",
+             "alpha": mat["alpha"], "sample_visible": True,
+             "specular_reflectance": {"type": "rgb", "value": mat.get("tint", [1.0] * 3)}}
+    else:
+        refuse(scene, f"material type {kind!r}")
+    return {"type": "twosided", "bsdf": b} if mat.get("two_sided", False) else b
+
+
+def shape(scene, obj, materials):
+    kind = obj.get("shape")
+    if kind is None:
+        refuse(scene, "a mesh file")
+    levels = obj.get("subdivisions")
+    if kind in ("rectangle", "cube"):
+        d = {"type": kind}
+    elif kind == "sphere":
+        levels = 3 if levels is None else levels
+        d = {"type": "ply", "filename": ply(f"sphere{levels}", *icosphere(levels)), "face_normals": False}
+    elif kind == "disk":
+        levels = 64 if levels is None else levels
+        d = {"type": "ply", "filename": ply(f"disk{levels}", *disk(levels)), "face_normals": False}
+    else:
+        refuse(scene, f"shape {kind!r}")
+    d["to_world"] = to_world(obj)
+    d["bsdf"] = bsdf(scene, materials[obj["material"]])
+    if "emission" in obj:
+        d["emitter"] = {"type": "area", "radiance": {"type": "rgb", "value": obj["emission"]}}
+    return d
+
+
+def mitsuba_scene(path, spp, max_depth):
+    s = tomllib.loads(pathlib.Path(path).read_text())
+    cam, render = s["camera"], s.get("render", {})
+    width, height = cam["resolution"]
+    d = {
+        "type": "scene",
+        "integrator": {"type": "path", "max_depth": max_depth + 1, "rr_depth": render.get("rr_depth", 3)},
+        "sensor": {
+            "type": "perspective", "fov": cam.get("fov", 40.0), "fov_axis": "y",
+            "to_world": T().look_at(origin=cam["origin"], target=cam["target"], up=cam.get("up", [0, 1, 0])),
+            "sampler": {"type": "independent", "sample_count": spp},
+            "film": {"type": "hdrfilm", "width": width, "height": height, "rfilter": {"type": "box"}},
+        },
+    }
+    background = s.get("background", {})
+    if "envmap" in background:
+        refuse(path, "an environment map")
+    if "color" in background:
+        d["background"] = {"type": "constant", "radiance": {"type": "rgb", "value": background["color"]}}
+    for i, light in enumerate(s.get("lights", [])):
+        d[f"light{i}"] = {"type": "point", "position": light["position"],
+                          "intensity": {"type": "rgb", "value": light["intensity"]}}
+    for i, obj in enumerate(s["objects"]):
+        d[f"object{i}"] = shape(path, obj, s["materials"])
+    return mi.load_dict(d), width * height * spp
+
+
+def mitsuba_run(scene, samples, spp, threads):
+    """Best samples/s of two renders after a warm-up (kernel compilation), and the image."""
+    dr.set_thread_count(threads)
+    times, img = [], None
+    for seed in range(3):
+        start = time.perf_counter()
+        img = mi.render(scene, spp=spp, seed=seed)
+        dr.eval(img)
+        dr.sync_thread()
+        times.append(time.perf_counter() - start)
+    return samples / min(times[1:]), np.array(img, dtype=np.float64)[..., :3]
+
+
+def epsm_bench(binary, path, spp, max_depth):
+    """Samples/s by thread count (`bench render` runs one thread and all of them)."""
+    out = subprocess.run(
+        [binary, "bench", "render", path, "--max-depth", str(max_depth), "--spp", str(spp),
+         "--repeats", "1", "--json"],
+        check=True, capture_output=True, text=True).stdout
+    return {run["threads"]: run["samples_per_s"] for run in json.loads(out)["runs"]}
+
+
+def epsm_mean(binary, path, spp):
+    with tempfile.TemporaryDirectory() as tmp:
+        exr = pathlib.Path(tmp) / "epsm.exr"
+        subprocess.run([binary, "render", path, "--spp", str(spp), "-o", str(exr)],
+                       check=True, capture_output=True)
+        return np.array(mi.Bitmap(str(exr)), dtype=np.float64)[..., :3].reshape(-1, 3).mean(axis=0)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("scenes", nargs="*", help="epsm scene files (default: scenes/*.toml)")
+    ap.add_argument("--epsm", default="target/release/epsm")
+    ap.add_argument("--spp", type=int, default=256)
+    ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--threads", default="1,2", help="Mitsuba's thread counts; epsm's bench runs 1 and all")
+    args = ap.parse_args()
+    scenes = args.scenes or sorted(str(p) for p in pathlib.Path("scenes").glob("*.toml"))
+    threads = [int(t) for t in args.threads.split(",")]
+    print("| scene | max depth | threads | epsm samples/s | Mitsuba samples/s | epsm / Mitsuba | mean RGB epsm | mean RGB Mitsuba |")
+    print("|---|---|---|---|---|---|---|---|")
+    for path in scenes:
+        text = tomllib.loads(pathlib.Path(path).read_text())
+        max_depth = text.get("render", {}).get("max_depth", 8)
+        scene, samples = mitsuba_scene(path, args.spp, max_depth)
+        rates = {t: ([], []) for t in threads}
+        img = None
+        for _ in range(args.rounds):
+            ours = epsm_bench(args.epsm, path, args.spp, max_depth)
+            for t in threads:
+                theirs, img = mitsuba_run(scene, samples, args.spp, t)
+                rates[t][0].append(ours[t])
+                rates[t][1].append(theirs)
+        ours_mean = epsm_mean(args.epsm, path, args.spp)
+        theirs_mean = img.reshape(-1, 3).mean(axis=0)
+        fmt = lambda c: " ".join(f"{x:.4f}" for x in c)  # noqa: E731
+        for t in threads:
+            e, m = rates[t]
+            ratios = [a / b for a, b in zip(e, m)]
+            print(f"| `{path}` | {max_depth} | {t} | {min(e) / 1e6:.2f}–{max(e) / 1e6:.2f} M "
+                  f"| {min(m) / 1e6:.2f}–{max(m) / 1e6:.2f} M | {min(ratios):.2f}–{max(ratios):.2f} "
+                  f"| {fmt(ours_mean)} | {fmt(theirs_mean)} |", flush=True)
+        if not math.isclose(ours_mean.sum(), theirs_mean.sum(), rel_tol=0.05):
+            print(f"warning: {path}: mean colours differ by more than 5 %", file=sys.stderr)
+
+
+if __name__ == "__main__":
+    main()
