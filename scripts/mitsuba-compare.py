@@ -15,7 +15,10 @@ Default scenes: every `scenes/*.toml`. Mitsuba's backend needs `libLLVM` (Debian
 so every Mitsuba timing is the best of two renders after a warm-up render. Rounds
 alternate the two renderers, so compare rates within a round on a shared machine.
 
-The translation covers what the shipped scenes use and refuses the rest (mesh
+The scenes are translated from the TOML files rather than loaded from their
+Mitsuba twins in `scenes/mitsuba/`, whose spheres and disks are Mitsuba's analytic
+shapes: here both renderers intersect the same triangles. The translation covers
+what the shipped scenes use and refuses the rest (mesh
 files, textures, environment maps): the camera (`fov_axis = y`), `[render]`
 `max_depth` (Mitsuba counts path segments: epsm's `max_depth` + 1) and `rr_depth`,
 built-in shapes with the same geometry (rectangles and cubes are Mitsuba's own
