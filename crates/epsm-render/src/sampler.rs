@@ -36,15 +36,6 @@
 //! hash plus a handful of instructions each. The streams stay
 //! counter-based: every number is still a pure function of `(seed, pixel,
 //! sample, dimension)`.
-//!
-//! The strata themselves are computed for [`BATCH`] consecutive samples of a
-//! pixel at once ([`PixelKeys::strata`]): the permutation's rounds are the
-//! same integer operations for every sample, which the compiler runs 8
-//! samples per AVX2 instruction, instead of about 27 instructions for each
-//! stratified number (a sixth of the instructions per sample of
-//! `scenes/shadows.toml`, whose paths are short). The few indices that
-//! cycle-walk (`spp` not a power of two) finish one by one, so every stratum
-//! is the one the scalar walk gives.
 
 use glam::Vec2;
 
@@ -113,91 +104,32 @@ impl PixelKeys {
         }
     }
 
-    /// The strata of samples `first..first + BATCH` (those below `spp`) in
-    /// every stratified dimension; their streams are
-    /// [`Strata::sampler`]`(sample)`.
-    #[inline(always)]
-    pub fn strata(&self, first: u32) -> Strata<'_> {
-        let mut table = [[0u32; BATCH]; STRATIFIED_DIMENSIONS as usize];
-        // Lanes past the last sample repeat it, so every lane's walk ends.
-        let last = self.count - 1;
-        for (row, scramble) in table.iter_mut().zip(&self.strata) {
-            // One pass of the rounds per lane (vectorised), then the walk of
-            // the lanes that land at or past `count`, if any.
-            for (lane, x) in (0u32..).zip(row.iter_mut()) {
-                *x = self.rounds(first.saturating_add(lane).min(last), scramble);
-            }
-            if row.iter().fold(false, |walk, &x| walk | (x >= self.count)) {
-                for x in row.iter_mut() {
-                    while *x >= self.count {
-                        *x = self.rounds(*x, scramble);
-                    }
-                }
-            }
-        }
-        Strata {
+    /// The stream of sample `sample` (`< spp`) of this pixel.
+    #[inline]
+    pub fn sampler(&self, sample: u32) -> PixelSampler<'_> {
+        PixelSampler {
             keys: self,
-            first,
-            table,
+            sample_key: mix64(self.key ^ u64::from(sample).wrapping_mul(SAMPLE_STEP)),
+            sample,
         }
     }
 
     /// Stratum `π(i)` of sample `i < count` under the permutation keyed by
-    /// `s` (module docs): [`Self::rounds`], walked again while the result
-    /// is `≥ count`.
-    #[cfg(test)]
+    /// `s` (module docs): three rounds on `0..=mask`, walked again while the
+    /// result is `≥ count`.
+    #[inline(always)]
     fn stratum(&self, mut i: u32, s: &Scramble) -> u32 {
+        let [r0, r1, r2] = self.shifts;
         loop {
-            i = self.rounds(i, s);
+            i = (i ^ s.xor[0]).wrapping_mul(s.mul[0]) & self.mask;
+            i ^= i >> r0;
+            i = (i ^ s.xor[1]).wrapping_mul(s.mul[1]) & self.mask;
+            i ^= i >> r1;
+            i = (i ^ s.xor[2]).wrapping_mul(0x6935_FA69) & self.mask;
+            i ^= i >> r2;
             if i < self.count {
                 return i;
             }
-        }
-    }
-
-    /// The permutation's three rounds on `0..=mask` (module docs).
-    #[inline(always)]
-    fn rounds(&self, mut i: u32, s: &Scramble) -> u32 {
-        let [r0, r1, r2] = self.shifts;
-        i = (i ^ s.xor[0]).wrapping_mul(s.mul[0]) & self.mask;
-        i ^= i >> r0;
-        i = (i ^ s.xor[1]).wrapping_mul(s.mul[1]) & self.mask;
-        i ^= i >> r1;
-        i = (i ^ s.xor[2]).wrapping_mul(0x6935_FA69) & self.mask;
-        i ^ (i >> r2)
-    }
-}
-
-/// Samples a [`PixelKeys::strata`] batch holds (a power of two).
-pub const BATCH: usize = 16;
-const _: () = assert!(BATCH.is_power_of_two());
-
-/// The strata of [`BATCH`] consecutive samples of a pixel in every
-/// stratified dimension ([`PixelKeys::strata`]).
-#[derive(Clone, Debug)]
-pub struct Strata<'a> {
-    keys: &'a PixelKeys,
-    /// The batch's first sample.
-    first: u32,
-    /// `table[d][s − first]`: the stratum of sample `s` in dimension `d`
-    /// (meaningless for samples at or past `spp`).
-    table: [[u32; BATCH]; STRATIFIED_DIMENSIONS as usize],
-}
-
-impl Strata<'_> {
-    /// The stream of sample `sample` (in `first..first + BATCH`, `< spp`).
-    #[inline(always)]
-    pub fn sampler(&self, sample: u32) -> PixelSampler<'_> {
-        let lane = sample.wrapping_sub(self.first) as usize;
-        assert!(
-            lane < BATCH,
-            "sample {sample} outside the batch from {}",
-            self.first
-        );
-        PixelSampler {
-            strata: self,
-            sample_key: mix64(self.keys.key ^ u64::from(sample).wrapping_mul(SAMPLE_STEP)),
-            lane,
         }
     }
 }
@@ -209,13 +141,12 @@ impl Strata<'_> {
 /// branches) and the stream has no position to keep.
 #[derive(Clone, Copy, Debug)]
 pub struct PixelSampler<'a> {
-    /// The batch holding this sample's strata (and the pixel's keys).
-    strata: &'a Strata<'a>,
+    /// The pixel's sample-independent keys ([`PixelKeys`]).
+    keys: &'a PixelKeys,
     /// The per-sample key of the jitters and of the dimensions past the
     /// stratified ones.
     sample_key: u64,
-    /// The sample's column in the batch's table, `< BATCH`.
-    lane: usize,
+    sample: u32,
 }
 
 impl PixelSampler<'_> {
@@ -240,13 +171,12 @@ impl PixelSampler<'_> {
     #[inline(always)]
     fn number(&self, dim: u32, x: u64) -> f32 {
         let jitter = to_unit(mix_weyl(x));
-        let Some(row) = self.strata.table.get(dim as usize) else {
+        let keys = self.keys;
+        let Some(scramble) = keys.strata.get(dim as usize) else {
             return jitter;
         };
-        // `lane < BATCH` (asserted by `Strata::sampler`): the mask changes
-        // nothing and saves a bounds check.
-        let stratum = row[self.lane & (BATCH - 1)];
-        ((stratum as f32 + jitter) * self.strata.keys.inv_count).min(ONE_MINUS_EPSILON)
+        let stratum = keys.stratum(self.sample, scramble);
+        ((stratum as f32 + jitter) * keys.inv_count).min(ONE_MINUS_EPSILON)
     }
 
     /// The numbers of dimensions `dim` and `dim + 1`, in `[0, 1)²`.
@@ -357,40 +287,12 @@ mod tests {
         }
     }
 
-    /// A batch holds, for every sample it covers, the stratum the scalar
-    /// walk gives, whatever sample it starts at (the tracer starts batches
-    /// at multiples of `BATCH`, recording replays at any sample).
-    #[test]
-    fn batches_hold_the_strata_of_the_scalar_walk() {
-        for count in [1u32, 3, 7, 16, 17, 37, 100, 256] {
-            for pixel in [0u32, 77, 0xDEAD_BEEF] {
-                let keys = PixelKeys::new(4, pixel, count);
-                for first in 0..count {
-                    let strata = keys.strata(first);
-                    for sample in first..(first + BATCH as u32).min(count) {
-                        let sampler = strata.sampler(sample);
-                        for (d, scramble) in keys.strata.iter().enumerate() {
-                            let lane = (sample - first) as usize;
-                            assert_eq!(
-                                strata.table[d][lane],
-                                keys.stratum(sample, scramble),
-                                "{count} spp, pixel {pixel}, dim {d}, sample {sample} from {first}"
-                            );
-                            assert_eq!(sampler.lane, lane);
-                        }
-                    }
-                }
-            }
-        }
-    }
-
     #[test]
     fn blocks_give_the_numbers_of_their_dimensions() {
         for spp in [1u32, 16, 37] {
             let keys = PixelKeys::new(3, 4321, spp);
             for sample in 0..spp {
-                let strata = keys.strata(sample);
-                let sampler = strata.sampler(sample);
+                let sampler = keys.sampler(sample);
                 for first in 0..40 {
                     let block = sampler.block(first);
                     for offset in 0..12 {
@@ -410,7 +312,7 @@ mod tests {
             for dim in 0..STRATIFIED_DIMENSIONS {
                 let mut strata = vec![0u32; spp as usize];
                 for s in 0..spp {
-                    let x = keys.strata(s).sampler(s).get_1d(dim);
+                    let x = keys.sampler(s).get_1d(dim);
                     assert!((0.0..1.0).contains(&x));
                     strata[(x * spp as f32) as usize] += 1;
                 }
@@ -479,7 +381,7 @@ mod tests {
             let n = 256 * 400;
             for i in 0..n {
                 let keys = PixelKeys::new(5, i / 16, 16);
-                let v = keys.strata(i % 16).sampler(i % 16).get_2d(first);
+                let v = keys.sampler(i % 16).get_2d(first);
                 cells[(v.x * 16.0) as usize * 16 + (v.y * 16.0) as usize] += 1;
             }
             let expected = n as f64 / 256.0;
@@ -496,7 +398,7 @@ mod tests {
     fn streams_are_pure_functions_of_their_key_and_differ_between_keys() {
         let stream = |seed, pixel, sample, dim| {
             let keys = PixelKeys::new(seed, pixel, 16);
-            keys.strata(sample).sampler(sample).get_2d(dim)
+            keys.sampler(sample).get_2d(dim)
         };
         for dim in [0, 30] {
             let a = stream(1, 2, 3, dim);
@@ -516,7 +418,7 @@ mod tests {
             let (mut sx, mut sy, mut sxy, mut sxx, mut syy) = (0.0f64, 0.0, 0.0, 0.0, 0.0);
             for px in 0..n {
                 let keys = PixelKeys::new(3, px, 4);
-                let v = keys.strata(px % 4).sampler(px % 4).get_2d(dim);
+                let v = keys.sampler(px % 4).get_2d(dim);
                 let (x, y) = (v.x as f64, v.y as f64);
                 sx += x;
                 sy += y;

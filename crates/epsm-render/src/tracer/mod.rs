@@ -26,7 +26,7 @@ use crate::bvh::{BoxTest, Portable};
 use crate::camera::FilmRays;
 use crate::film::Image;
 use crate::record::{PathRecord, RecordLevel};
-use crate::sampler::{BATCH, PixelKeys, Strata};
+use crate::sampler::PixelKeys;
 use crate::scene::Scene;
 
 /// Side of the square tiles rendered by one task.
@@ -165,7 +165,7 @@ pub fn trace_samples(
                 scene,
                 &film_rays,
                 opts,
-                &keys.strata(s.sample),
+                &keys,
                 s.pixel,
                 s.sample,
                 Some((level, &mut rec)),
@@ -291,12 +291,8 @@ fn render_tile_body(
         for x in tile.x * TILE..((tile.x + 1) * TILE).min(w) {
             let pixel = UVec2::new(x, y);
             let keys = PixelKeys::new(opts.seed, y * w + x, opts.spp);
-            let mut strata = keys.strata(0);
             let mut sum = Vec3::ZERO;
             for s in 0..opts.spp {
-                if s % BATCH as u32 == 0 && s > 0 {
-                    strata = keys.strata(s);
-                }
                 let l = match level {
                     Some(level) => {
                         let mut rec = PathRecord::default();
@@ -304,7 +300,7 @@ fn render_tile_body(
                             scene,
                             &film_rays,
                             opts,
-                            &strata,
+                            &keys,
                             pixel,
                             s,
                             Some((level, &mut rec)),
@@ -318,7 +314,7 @@ fn render_tile_body(
                         scene,
                         &film_rays,
                         opts,
-                        &strata,
+                        &keys,
                         pixel,
                         s,
                         None,
@@ -334,8 +330,8 @@ fn render_tile_body(
     out
 }
 
-/// Traces one pixel sample (primary rays by `film_rays`, the strata of a
-/// batch of the pixel's samples holding it, box tests by `boxes`);
+/// Traces one pixel sample (primary rays by `film_rays`, the pixel's `keys`,
+/// box tests by `boxes`);
 /// returns its radiance (zero, and counted, when it was not finite).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
@@ -343,14 +339,14 @@ fn trace_pixel_sample(
     scene: &Scene,
     film_rays: &FilmRays,
     opts: &RenderOptions,
-    strata: &Strata<'_>,
+    keys: &PixelKeys,
     pixel: UVec2,
     sample: u32,
     record: Option<(RecordLevel, &mut PathRecord)>,
     counters: &mut TraceCounters,
     boxes: impl BoxTest,
 ) -> Vec3 {
-    let sampler = strata.sampler(sample);
+    let sampler = keys.sampler(sample);
     let film = pixel.as_vec2() + sampler.get_2d(DIM_FILM);
     let ray = film_rays.ray(film);
     let mut rec = record.map(|(level, rec)| {
