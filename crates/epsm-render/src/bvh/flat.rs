@@ -23,15 +23,34 @@
 //! more lanes empty).
 //!
 //! The walk (closest hit) tests a node's eight boxes at once, then first the
-//! packets of the leaf children hit (their hits lower `t_max`; a packet is
-//! skipped by the children of each packet that the node stores, so that
-//! branch waits only for the box test, not for a load from the packet:
-//! +0.8 % samples per CPU-second on `scenes/caustic-box.toml`, within the
-//! noise of single pairs but ahead in 9 of 12), then pushes
+//! packets of the leaf children hit (their hits lower `t_max`), then pushes
 //! the inner children entered before `t_max` on a stack sorted by entry
 //! distance, nearest on top, and continues with the nearest pending node not
 //! culled by the current `t_max`. With `ANY` (occlusion, shadow rays) it
 //! returns at the first hit within `[t_min, t_max]`.
+//!
+//! The packet loop runs over the node's packets in order and skips one
+//! without a leaf child hit by a byte the node stores per packet (the union
+//! of its lanes' children), so that branch waits only for the box test, not
+//! for a load from the packet: +0.5 % samples per CPU-second on
+//! `scenes/caustic-box.toml` (within the noise of single pairs, ahead in 15
+//! of 22). Visiting only the packets with a leaf hit by their bit mask, or
+//! ending the loop after the last of them, made the packet addresses or the
+//! loop's end depend on the box test, and cost 5–9 % in time although the
+//! simulated mispredicts fell (by 18 % with the mask).
+//!
+//! The inner children are pushed by one loop over the bits of those hit
+//! (its test is 1.07 M of the 6.85 M simulated mispredicts at spp 8) and
+//! the next node is always popped. Measured and dropped (time per
+//! CPU-second): continuing straight with a lone inner child (no push and
+//! pop; with the vector cull below), −4 %; continuing with the nearest
+//! child just pushed, without the pop loop's checks, −2 to −4 % on two
+//! threads; culling the children past `t_max` by one vector compare before
+//! the loop, −5 %; the walk out of line (its own register allocation), −4
+//! to −6 %. In the listings looked at (the lone child, the packet mask),
+//! the AVX2 tile loop that the walk is inlined into then reloaded the
+//! ray's box-test constants for every node instead of keeping them in
+//! registers.
 //!
 //! The stack holds [`STACK`] nodes; a node pushes at most seven entries
 //! beyond the one it continues with, so trees up to 18 levels deep never
