@@ -32,12 +32,14 @@
 //! The packet loop runs over the node's packets in order and skips one
 //! without a leaf child hit by a byte the node stores per packet (the union
 //! of its lanes' children), so that branch waits only for the box test, not
-//! for a load from the packet: +0.5 % samples per CPU-second on
-//! `scenes/caustic-box.toml` (within the noise of single pairs, ahead in 15
-//! of 22). Visiting only the packets with a leaf hit by their bit mask, or
-//! ending the loop after the last of them, made the packet addresses or the
-//! loop's end depend on the box test, and cost 5–9 % in time although the
-//! simulated mispredicts fell (by 18 % with the mask).
+//! for a load from the packet: samples per CPU-second on
+//! `scenes/caustic-box.toml` +1.8 % on one thread and +1.4 % on two at
+//! load 1 (8 rounds back to back, ahead in 7 and 5 of 8), +0.5 % at load
+//! 1.7–2.9 (11 rounds, ahead in 15 of 22 pairs). Visiting only the
+//! packets with a leaf hit by their bit mask, or ending the loop after the
+//! last of them, made the packet addresses or the loop's end depend on the
+//! box test, and cost 5–9 % in time although the simulated mispredicts
+//! fell (by 18 % with the mask).
 //!
 //! The inner children are pushed by one loop over the bits of those hit
 //! (its test is 1.07 M of the 6.85 M simulated mispredicts at spp 8) and
