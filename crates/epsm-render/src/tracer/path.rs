@@ -104,6 +104,28 @@ pub(super) fn trace_path(
         let wi = material.to_local(frame, wi_world);
         let kind = material.vertex_kind();
 
+        // Sample the BSDF to continue, before next-event estimation: the
+        // continuation's direction does not depend on it, and computed first
+        // its latency (the direction map, the frame) overlaps the shadow
+        // ray's walk instead of following it.
+        let u_lobe = numbers.get_1d(DIM_LOBE);
+        let u_dir = numbers.get_2d(DIM_DIRECTION);
+        let sample = scatters
+            .then(|| material.sample(wi, sp.uv, u_lobe, u_dir))
+            .flatten();
+        let mut next = None;
+        if let Some(bs) = sample {
+            let wo_world = frame.to_world(bs.wo);
+            let wo_ng = wo_world.dot(sp.ng);
+            let reflect = !bs.lobe.is_transmission();
+            let same_side = wo_ng * wi_ng > 0.0;
+            if same_side == reflect {
+                next = Some((bs, wo_world, wo_ng));
+            } else {
+                counters.leaks += 1;
+            }
+        }
+
         // Next-event estimation toward a light.
         let record_at = rec
             .as_deref()
@@ -123,26 +145,6 @@ pub(super) fn trace_path(
         contribution += nee.contribution;
         let connection = nee.connection;
         radiance += contribution;
-
-        // Sample the BSDF to continue (whether or not next-event estimation
-        // drew its three numbers).
-        let u_lobe = numbers.get_1d(DIM_LOBE);
-        let u_dir = numbers.get_2d(DIM_DIRECTION);
-        let sample = scatters
-            .then(|| material.sample(wi, sp.uv, u_lobe, u_dir))
-            .flatten();
-        let mut next = None;
-        if let Some(bs) = sample {
-            let wo_world = frame.to_world(bs.wo);
-            let wo_ng = wo_world.dot(sp.ng);
-            let reflect = !bs.lobe.is_transmission();
-            let same_side = wo_ng * wi_ng > 0.0;
-            if same_side == reflect {
-                next = Some((bs, wo_world, wo_ng));
-            } else {
-                counters.leaks += 1;
-            }
-        }
 
         if let Some(r) = rec.as_deref_mut().filter(|r| !r.done) {
             let at = TrianglePoint {
