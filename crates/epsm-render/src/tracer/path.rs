@@ -59,18 +59,13 @@ pub(super) fn trace_path(
     // scattering reaches still adds what it emits (or the background seen),
     // so both strategies of that scattering's direct light are counted, as
     // their MIS weights assume (pbrt-v4's and Mitsuba 3's depth rule).
-    //
-    // Each vertex traces its continuation (the next vertex's hit) before its
-    // shadow ray: the next vertex's shading then depends on a walk that has
-    // already ended, and runs while the shadow ray walks.
-    counters.rays += 1;
-    let mut found = scene.accel().closest_hit_with(&ray, boxes);
     for depth in 0..=opts.max_depth {
         let scatters = depth < opts.max_depth;
         let numbers = sampler.block(DIM_FIRST_BOUNCE + depth * DIMS_PER_BOUNCE);
+        counters.rays += 1;
 
-        // The vertex `ray` found; rays that leave see the background.
-        let Some(hit) = found else {
+        // Find the next vertex; rays that leave see the background.
+        let Some(hit) = scene.accel().closest_hit_with(&ray, boxes) else {
             let dir = ray.dir.normalize();
             let le = scene.background().eval(dir);
             if le != Vec3::ZERO {
@@ -131,33 +126,6 @@ pub(super) fn trace_path(
             }
         }
 
-        // The continuation: its throughput, Russian roulette (on the
-        // throughput with radiance scaling undone) and the next vertex's hit;
-        // `None` ends the path here.
-        let mut continuation = None;
-        if let Some((bs, wo_world, wo_ng)) = next {
-            let mut beta_next = beta * bs.weight;
-            let eta_next = if bs.lobe.is_transmission() {
-                eta_scale * (bs.eta * bs.eta)
-            } else {
-                eta_scale
-            };
-            let mut ends = false;
-            if depth + 1 >= opts.rr_depth {
-                let q = (beta_next.max_element() * eta_next).min(0.95);
-                ends = q <= 0.0 || numbers.get_1d(DIM_ROULETTE) >= q;
-                beta_next /= q;
-            }
-            if !ends && beta_next != Vec3::ZERO {
-                let side = if wo_ng >= 0.0 { sp.ng } else { -sp.ng };
-                ray = Ray::new(offset_origin(sp.p, side), wo_world);
-                counters.rays += 1;
-                found = scene.accel().closest_hit_with(&ray, boxes);
-                let prev_next = Some((sp.p, bs.pdf)).filter(|_| !bs.lobe.is_delta());
-                continuation = Some((beta_next, eta_next, prev_next));
-            }
-        }
-
         // Next-event estimation toward a light.
         let record_at = rec
             .as_deref()
@@ -208,12 +176,28 @@ pub(super) fn trace_path(
             };
         }
 
-        let Some((beta_next, eta_next, prev_next)) = continuation else {
+        let Some((bs, wo_world, wo_ng)) = next else {
             break;
         };
-        beta = beta_next;
-        eta_scale = eta_next;
-        prev = prev_next;
+        beta *= bs.weight;
+        if bs.lobe.is_transmission() {
+            eta_scale *= bs.eta * bs.eta;
+        }
+        prev = Some((sp.p, bs.pdf)).filter(|_| !bs.lobe.is_delta());
+        let side = if wo_ng >= 0.0 { sp.ng } else { -sp.ng };
+        ray = Ray::new(offset_origin(sp.p, side), wo_world);
+
+        // Russian roulette on the throughput with radiance scaling undone.
+        if depth + 1 >= opts.rr_depth {
+            let q = (beta.max_element() * eta_scale).min(0.95);
+            if q <= 0.0 || numbers.get_1d(DIM_ROULETTE) >= q {
+                break;
+            }
+            beta /= q;
+        }
+        if beta == Vec3::ZERO {
+            break;
+        }
     }
     radiance
 }
