@@ -9,7 +9,6 @@ use super::{
 };
 use crate::bvh::BoxTest;
 use crate::hit::SurfacePoint;
-use crate::lights::LightSample;
 use crate::materials::{Material, VertexKind};
 use crate::ray::{Ray, offset_origin};
 use crate::record::{
@@ -105,24 +104,6 @@ pub(super) fn trace_path(
         let wi = material.to_local(frame, wi_world);
         let kind = material.vertex_kind();
 
-        // Next-event estimation toward a light.
-        let record_at = rec
-            .as_deref()
-            .filter(|r| !r.done && r.level >= RecordLevel::FirstDiffuse)
-            .map(|r| r.rec.vertices.len() as u32);
-        let shading = Shading {
-            sp: &sp,
-            wi,
-            wi_ng,
-            material,
-        };
-        // Its light sample first (the shadow ray's set-up then overlaps the
-        // BSDF sampling below); its shadow ray after.
-        let connection = if scatters {
-            light_connection(scene, &shading, beta, &numbers)
-        } else {
-            None
-        };
         // Sample the BSDF to continue, before next-event estimation: the
         // continuation's direction does not depend on it, and computed first
         // its latency (the direction map, the frame) overlaps the shadow
@@ -145,7 +126,22 @@ pub(super) fn trace_path(
             }
         }
 
-        let nee = finish_connection(scene, connection, record_at, counters, boxes);
+        // Next-event estimation toward a light.
+        let record_at = rec
+            .as_deref()
+            .filter(|r| !r.done && r.level >= RecordLevel::FirstDiffuse)
+            .map(|r| r.rec.vertices.len() as u32);
+        let shading = Shading {
+            sp: &sp,
+            wi,
+            wi_ng,
+            material,
+        };
+        let nee = if scatters {
+            next_event(scene, &shading, beta, &numbers, record_at, counters, boxes)
+        } else {
+            NextEvent::NONE
+        };
         contribution += nee.contribution;
         let connection = nee.connection;
         radiance += contribution;
@@ -233,71 +229,42 @@ impl NextEvent {
     };
 }
 
-/// A light connection of one vertex before its shadow ray is traced.
-struct Connection {
-    /// The light point.
-    ls: LightSample,
-    /// Its contribution if unoccluded.
-    unoccluded: Vec3,
-    /// The shadow ray toward it.
-    shadow: Ray,
-}
-
-/// Samples a light, evaluates the BSDF toward it and MIS-weights against
-/// BSDF sampling: the connection whose shadow ray [`finish_connection`]
-/// traces (`None` when nothing can arrive). Draws three random numbers of
-/// the bounce's block `numbers`, none at a delta vertex.
+/// Samples a light, evaluates the BSDF toward it, MIS-weights against BSDF
+/// sampling and traces the shadow ray (box tests by `boxes`). Draws three
+/// random numbers of the bounce's block `numbers`, none at a delta vertex.
 #[inline(always)]
-fn light_connection(
+fn next_event(
     scene: &Scene,
     at: &Shading<'_>,
     beta: Vec3,
     numbers: &Block<'_>,
-) -> Option<Connection> {
+    record_at: Option<u32>,
+    counters: &mut TraceCounters,
+    boxes: impl BoxTest,
+) -> NextEvent {
+    let mut out = NextEvent::NONE;
     if at.material.is_delta() {
-        return None;
+        return out;
     }
     let u_select = numbers.get_1d(DIM_LIGHT_SELECT);
     let u_light = numbers.get_2d(DIM_LIGHT);
-    let ls = scene.lights().sample(at.sp.p, u_select, u_light)?;
+    let Some(ls) = scene.lights().sample(at.sp.p, u_select, u_light) else {
+        return out;
+    };
     let wo = at.material.to_local(&at.sp.frame, ls.wo);
     let f = at.material.eval(at.wi, wo, at.sp.uv);
     let wo_ng = ls.wo.dot(at.sp.ng);
     let same_side = wo_ng * at.wi_ng > 0.0;
     if f == Vec3::ZERO || !same_side || ls.pdf <= 0.0 {
-        return None;
+        return out;
     }
     let w = if ls.delta {
         1.0
     } else {
         mis(ls.pdf, at.material.pdf(at.wi, wo, at.sp.uv))
     };
-    Some(Connection {
-        unoccluded: beta * f * ls.radiance * (w / ls.pdf),
-        shadow: shadow_ray(at.sp, ls.wo, wo_ng, ls.position, ls.dist),
-        ls,
-    })
-}
-
-/// Traces a connection's shadow ray (box tests by `boxes`): what next-event
-/// estimation added, and its record when recording at vertex `record_at`.
-#[inline(always)]
-fn finish_connection(
-    scene: &Scene,
-    connection: Option<Connection>,
-    record_at: Option<u32>,
-    counters: &mut TraceCounters,
-    boxes: impl BoxTest,
-) -> NextEvent {
-    let mut out = NextEvent::NONE;
-    let Some(Connection {
-        ls,
-        unoccluded,
-        shadow,
-    }) = connection
-    else {
-        return out;
-    };
+    let unoccluded = beta * f * ls.radiance * (w / ls.pdf);
+    let shadow = shadow_ray(at.sp, ls.wo, wo_ng, ls.position, ls.dist);
     counters.shadow_rays += 1;
     let blocked = scene.accel().occluded_with(&shadow, boxes);
     if !blocked {
