@@ -13,7 +13,7 @@
 
 use std::time::Instant;
 
-use glam::{UVec2, Vec3};
+use glam::{UVec2, Vec2, Vec3};
 use rayon::prelude::*;
 
 mod path;
@@ -25,6 +25,7 @@ use crate::bvh::Avx;
 use crate::bvh::{BoxTest, Portable};
 use crate::camera::FilmRays;
 use crate::film::Image;
+use crate::ray::Ray;
 use crate::record::{PathRecord, RecordLevel};
 use crate::sampler::PixelKeys;
 use crate::scene::Scene;
@@ -163,11 +164,11 @@ pub fn trace_samples(
             let keys = PixelKeys::new(opts.seed, s.pixel.y * width + s.pixel.x, opts.spp);
             trace_pixel_sample(
                 scene,
-                &film_rays,
                 opts,
                 &keys,
                 s.pixel,
                 s.sample,
+                camera_sample(&film_rays, &keys, s.pixel, s.sample),
                 Some((level, &mut rec)),
                 &mut counters,
                 Portable,
@@ -292,17 +293,26 @@ fn render_tile_body(
             let pixel = UVec2::new(x, y);
             let keys = PixelKeys::new(opts.seed, y * w + x, opts.spp);
             let mut sum = Vec3::ZERO;
+            let mut camera = camera_sample(&film_rays, &keys, pixel, 0);
             for s in 0..opts.spp {
+                // The next sample's camera ray is made before this sample's
+                // path is traced: it does not depend on the path, and made
+                // after it, its latency (hashes, a normalisation) would
+                // follow the path's last branch.
+                let current = camera;
+                if s + 1 < opts.spp {
+                    camera = camera_sample(&film_rays, &keys, pixel, s + 1);
+                }
                 let l = match level {
                     Some(level) => {
                         let mut rec = PathRecord::default();
                         let l = trace_pixel_sample(
                             scene,
-                            &film_rays,
                             opts,
                             &keys,
                             pixel,
                             s,
+                            current,
                             Some((level, &mut rec)),
                             &mut out.counters,
                             boxes,
@@ -312,11 +322,11 @@ fn render_tile_body(
                     }
                     None => trace_pixel_sample(
                         scene,
-                        &film_rays,
                         opts,
                         &keys,
                         pixel,
                         s,
+                        current,
                         None,
                         &mut out.counters,
                         boxes,
@@ -330,25 +340,31 @@ fn render_tile_body(
     out
 }
 
-/// Traces one pixel sample (primary rays by `film_rays`, the pixel's `keys`,
-/// box tests by `boxes`);
+/// Where sample `sample` of `pixel` falls on the film (pixel units) and its
+/// camera ray (by `film_rays`, the pixel's `keys`).
+#[inline(always)]
+fn camera_sample(film_rays: &FilmRays, keys: &PixelKeys, pixel: UVec2, sample: u32) -> (Vec2, Ray) {
+    let film = pixel.as_vec2() + keys.sampler(sample).get_2d(DIM_FILM);
+    (film, film_rays.ray(film))
+}
+
+/// Traces one pixel sample from its [`camera_sample`] `(film, ray)` (the
+/// pixel's `keys`, box tests by `boxes`);
 /// returns its radiance (zero, and counted, when it was not finite).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn trace_pixel_sample(
     scene: &Scene,
-    film_rays: &FilmRays,
     opts: &RenderOptions,
     keys: &PixelKeys,
     pixel: UVec2,
     sample: u32,
+    (film, ray): (Vec2, Ray),
     record: Option<(RecordLevel, &mut PathRecord)>,
     counters: &mut TraceCounters,
     boxes: impl BoxTest,
 ) -> Vec3 {
     let sampler = keys.sampler(sample);
-    let film = pixel.as_vec2() + sampler.get_2d(DIM_FILM);
-    let ray = film_rays.ray(film);
     let mut rec = record.map(|(level, rec)| {
         *rec = PathRecord {
             pixel,
