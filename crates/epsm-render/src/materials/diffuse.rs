@@ -29,10 +29,10 @@ pub struct Diffuse {
 }
 
 impl Diffuse {
-    /// The sample of the cosine-distributed direction `wo` (local, upper
-    /// hemisphere, [`cosine_hemisphere`] of the sample's numbers; `wi.z > 0`).
+    /// Samples a cosine-distributed `wo` (local, upper hemisphere; `wi.z > 0`).
     #[inline(always)]
-    pub(super) fn sample(&self, uv: Vec2, wo: Vec3) -> Option<BsdfSample> {
+    pub(super) fn sample(&self, uv: Vec2, u: Vec2) -> Option<BsdfSample> {
+        let wo = cosine_hemisphere(u);
         let pdf = wo.z * FRAC_1_PI;
         if pdf <= 0.0 {
             return None;

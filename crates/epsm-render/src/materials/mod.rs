@@ -98,30 +98,6 @@ impl Lobe {
     }
 }
 
-/// The two numbers that choose a sampled direction, with the diffuse lobe's
-/// cosine-weighted direction for them already mapped ([`Self::new`]): that
-/// map depends on the numbers only, so the tracer computes it before it
-/// knows the next vertex, and its latency (a division, a square root)
-/// overlaps the walk that finds the vertex.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct DirectionNumbers {
-    /// The numbers, in `[0, 1)²`.
-    pub u: Vec2,
-    /// [`diffuse::cosine_hemisphere`]`(u)`.
-    pub cosine: Vec3,
-}
-
-impl DirectionNumbers {
-    /// The numbers `u` and their cosine-weighted direction.
-    #[inline(always)]
-    pub fn new(u: Vec2) -> Self {
-        Self {
-            u,
-            cosine: diffuse::cosine_hemisphere(u),
-        }
-    }
-}
-
 /// A sampled scattering direction.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BsdfSample {
@@ -181,21 +157,14 @@ impl Material {
     /// (`−z` for the smooth conductor and diffuse seen from the back).
     /// Dielectrics have an inside and are never mirrored (`m = +z` always).
     #[inline(always)]
-    pub fn sample(
-        &self,
-        wi: Vec3,
-        uv: Vec2,
-        u_lobe: f32,
-        dir: DirectionNumbers,
-    ) -> Option<BsdfSample> {
-        let u = dir.u;
+    pub fn sample(&self, wi: Vec3, uv: Vec2, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
         let side = match &self.bsdf {
             Bsdf::Dielectric(d) => return d.sample(wi, u_lobe),
             _ => self.side(wi)?,
         };
         let wi = side.apply(wi);
         let s = match &self.bsdf {
-            Bsdf::Diffuse(d) => d.sample(uv, dir.cosine),
+            Bsdf::Diffuse(d) => d.sample(uv, u),
             Bsdf::Conductor(c) => c.sample(wi),
             Bsdf::RoughConductor(r) => r.sample(wi, u),
             Bsdf::Dielectric(_) => None,

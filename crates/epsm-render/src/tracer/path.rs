@@ -9,7 +9,7 @@ use super::{
 };
 use crate::bvh::BoxTest;
 use crate::hit::SurfacePoint;
-use crate::materials::{DirectionNumbers, Material, VertexKind};
+use crate::materials::{Material, VertexKind};
 use crate::ray::{Ray, offset_origin};
 use crate::record::{
     ConnectionRecord, OccluderRecord, PathRecord, RecordLevel, TrianglePoint, VertexRecord,
@@ -62,9 +62,6 @@ pub(super) fn trace_path(
     for depth in 0..=opts.max_depth {
         let scatters = depth < opts.max_depth;
         let numbers = sampler.block(DIM_FIRST_BOUNCE + depth * DIMS_PER_BOUNCE);
-        // The direction numbers' diffuse map, ahead of the walk
-        // ([`DirectionNumbers`]).
-        let u_dir = DirectionNumbers::new(numbers.get_2d(DIM_DIRECTION));
         counters.rays += 1;
 
         // Find the next vertex; rays that leave see the background.
@@ -112,6 +109,7 @@ pub(super) fn trace_path(
         // its latency (the direction map, the frame) overlaps the shadow
         // ray's walk instead of following it.
         let u_lobe = numbers.get_1d(DIM_LOBE);
+        let u_dir = numbers.get_2d(DIM_DIRECTION);
         let sample = scatters
             .then(|| material.sample(wi, sp.uv, u_lobe, u_dir))
             .flatten();
