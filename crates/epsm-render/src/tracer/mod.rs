@@ -27,7 +27,7 @@ use crate::camera::FilmRays;
 use crate::film::Image;
 use crate::ray::Ray;
 use crate::record::{PathRecord, RecordLevel};
-use crate::sampler::PixelKeys;
+use crate::sampler::{PixelKeys, PixelSampler};
 use crate::scene::Scene;
 
 /// Side of the square tiles rendered by one task.
@@ -165,9 +165,6 @@ pub fn trace_samples(
             trace_pixel_sample(
                 scene,
                 opts,
-                &keys,
-                s.pixel,
-                s.sample,
                 camera_sample(&film_rays, &keys, s.pixel, s.sample),
                 Some((level, &mut rec)),
                 &mut counters,
@@ -309,9 +306,6 @@ fn render_tile_body(
                         let l = trace_pixel_sample(
                             scene,
                             opts,
-                            &keys,
-                            pixel,
-                            s,
                             current,
                             Some((level, &mut rec)),
                             &mut out.counters,
@@ -320,17 +314,9 @@ fn render_tile_body(
                         out.records.push(rec);
                         l
                     }
-                    None => trace_pixel_sample(
-                        scene,
-                        opts,
-                        &keys,
-                        pixel,
-                        s,
-                        current,
-                        None,
-                        &mut out.counters,
-                        boxes,
-                    ),
+                    None => {
+                        trace_pixel_sample(scene, opts, current, None, &mut out.counters, boxes)
+                    }
                 };
                 sum += l;
             }
@@ -340,31 +326,54 @@ fn render_tile_body(
     out
 }
 
-/// Where sample `sample` of `pixel` falls on the film (pixel units) and its
-/// camera ray (by `film_rays`, the pixel's `keys`).
-#[inline(always)]
-fn camera_sample(film_rays: &FilmRays, keys: &PixelKeys, pixel: UVec2, sample: u32) -> (Vec2, Ray) {
-    let film = pixel.as_vec2() + keys.sampler(sample).get_2d(DIM_FILM);
-    (film, film_rays.ray(film))
+/// A pixel sample: which it is, its random stream, where it falls on the
+/// film (pixel units) and its camera ray ([`camera_sample`]).
+#[derive(Clone, Copy)]
+struct CameraSample<'a> {
+    pixel: UVec2,
+    sample: u32,
+    sampler: PixelSampler<'a>,
+    film: Vec2,
+    ray: Ray,
 }
 
-/// Traces one pixel sample from its [`camera_sample`] `(film, ray)` (the
-/// pixel's `keys`, box tests by `boxes`);
+/// Sample `sample` of `pixel`: its stream (the pixel's `keys`), film
+/// position and camera ray (by `film_rays`).
+#[inline(always)]
+fn camera_sample<'a>(
+    film_rays: &FilmRays,
+    keys: &'a PixelKeys,
+    pixel: UVec2,
+    sample: u32,
+) -> CameraSample<'a> {
+    let sampler = keys.sampler(sample);
+    let film = pixel.as_vec2() + sampler.get_2d(DIM_FILM);
+    CameraSample {
+        pixel,
+        sample,
+        sampler,
+        film,
+        ray: film_rays.ray(film),
+    }
+}
+
+/// Traces a pixel sample from its [`camera_sample`] (box tests by `boxes`);
 /// returns its radiance (zero, and counted, when it was not finite).
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
 fn trace_pixel_sample(
     scene: &Scene,
     opts: &RenderOptions,
-    keys: &PixelKeys,
-    pixel: UVec2,
-    sample: u32,
-    (film, ray): (Vec2, Ray),
+    CameraSample {
+        pixel,
+        sample,
+        sampler,
+        film,
+        ray,
+    }: CameraSample<'_>,
     record: Option<(RecordLevel, &mut PathRecord)>,
     counters: &mut TraceCounters,
     boxes: impl BoxTest,
 ) -> Vec3 {
-    let sampler = keys.sampler(sample);
     let mut rec = record.map(|(level, rec)| {
         *rec = PathRecord {
             pixel,
