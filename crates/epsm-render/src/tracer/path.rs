@@ -184,8 +184,7 @@ pub(super) fn trace_path(
             eta_scale *= bs.eta * bs.eta;
         }
         prev = Some((sp.p, bs.pdf)).filter(|_| !bs.lobe.is_delta());
-        let side = if wo_ng >= 0.0 { sp.ng } else { -sp.ng };
-        ray = Ray::new(offset_origin(sp.p, side), wo_world);
+        ray = Ray::new(leaving_origin(&sp, wo_ng), wo_world);
 
         // Russian roulette on the throughput with radiance scaling undone.
         if depth + 1 >= opts.rr_depth {
@@ -282,11 +281,18 @@ fn next_event(
     out
 }
 
+/// The origin of a ray leaving surface point `sp` in a direction whose
+/// cosine with the geometric normal is `wo_ng`: offset to that side.
+#[inline(always)]
+fn leaving_origin(sp: &SurfacePoint, wo_ng: f32) -> Vec3 {
+    let side = if wo_ng >= 0.0 { sp.ng } else { -sp.ng };
+    offset_origin(sp.p, side)
+}
+
 /// The shadow ray from surface point `sp` toward a light point `y` (or along
 /// `wo` for the background when `dist` is infinite); `wo_ng = wo · ng`.
 fn shadow_ray(sp: &SurfacePoint, wo: Vec3, wo_ng: f32, y: Vec3, dist: f32) -> Ray {
-    let side = if wo_ng >= 0.0 { sp.ng } else { -sp.ng };
-    let origin = offset_origin(sp.p, side);
+    let origin = leaving_origin(sp, wo_ng);
     if dist.is_finite() {
         Ray {
             origin,
