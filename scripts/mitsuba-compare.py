@@ -34,6 +34,7 @@ box pixels: both estimate the same image, which the mean-colour columns check.
 import argparse
 import json
 import math
+import os
 import pathlib
 import subprocess
 import sys
@@ -41,9 +42,12 @@ import tempfile
 import time
 import tomllib
 
-import drjit as dr
-import mitsuba as mi
-import numpy as np
+try:
+    import drjit as dr
+    import mitsuba as mi
+    import numpy as np
+except ImportError as e:
+    sys.exit(f"{e}: this script needs `pip install mitsuba==3.6.4 numpy` (see its header)")
 
 mi.set_variant("llvm_ad_rgb")
 T = mi.ScalarTransform4f
@@ -199,36 +203,69 @@ def mitsuba_run(scene, samples, spp, threads):
     return samples / min(times[1:]), np.array(img, dtype=np.float64)[..., :3]
 
 
+def run_epsm(binary, args):
+    """epsm's standard output for `args`; exits with epsm's own error (which names the
+    file and field of a bad scene) when it fails."""
+    try:
+        done = subprocess.run([binary, *args], capture_output=True, text=True)
+    except OSError as e:
+        sys.exit(f"epsm binary {binary}: {e} (build it with `cargo build --release -p epsm-cli`"
+                 " or pass --epsm)")
+    if done.returncode != 0:
+        sys.exit(f"epsm {' '.join(args)} failed:\n{done.stderr.strip()}")
+    return done.stdout
+
+
 def epsm_bench(binary, path, spp, max_depth):
     """Samples/s by thread count (`bench render` runs one thread and all of them)."""
-    out = subprocess.run(
-        [binary, "bench", "render", path, "--max-depth", str(max_depth), "--spp", str(spp),
-         "--repeats", "1", "--json"],
-        check=True, capture_output=True, text=True).stdout
+    out = run_epsm(binary, ["bench", "render", path, "--max-depth", str(max_depth),
+                            "--spp", str(spp), "--repeats", "1", "--json"])
     return {run["threads"]: run["samples_per_s"] for run in json.loads(out)["runs"]}
 
 
 def epsm_mean(binary, path, spp):
     with tempfile.TemporaryDirectory() as tmp:
         exr = pathlib.Path(tmp) / "epsm.exr"
-        subprocess.run([binary, "render", path, "--spp", str(spp), "-o", str(exr)],
-                       check=True, capture_output=True)
+        run_epsm(binary, ["render", path, "--spp", str(spp), "-o", str(exr)])
         return np.array(mi.Bitmap(str(exr)), dtype=np.float64)[..., :3].reshape(-1, 3).mean(axis=0)
+
+
+def positive(text):
+    """An argument that must be a positive integer."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a positive integer")
+    return value
+
+
+def thread_counts(text):
+    """`--threads`: comma-separated counts among those epsm's bench runs (1 and all CPUs)."""
+    runs = {1, os.cpu_count() or 1}
+    counts = [positive(t) for t in text.split(",")]
+    if not set(counts) <= runs:
+        raise argparse.ArgumentTypeError(f"{text!r}: epsm's bench runs only {sorted(runs)} threads")
+    return counts
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("scenes", nargs="*", help="epsm scene files (default: scenes/*.toml)")
     ap.add_argument("--epsm", default="target/release/epsm")
-    ap.add_argument("--spp", type=int, default=256)
-    ap.add_argument("--rounds", type=int, default=3)
-    ap.add_argument("--threads", default="1,2", help="Mitsuba's thread counts; epsm's bench runs 1 and all")
+    ap.add_argument("--spp", type=positive, default=256)
+    ap.add_argument("--rounds", type=positive, default=3)
+    ap.add_argument("--threads", type=thread_counts, default="1,2",
+                    help="thread counts, comma-separated: 1 and the CPU count, which epsm's bench runs")
     args = ap.parse_args()
     scenes = args.scenes or sorted(str(p) for p in pathlib.Path("scenes").glob("*.toml"))
-    threads = [int(t) for t in args.threads.split(",")]
+    threads = args.threads
     print("| scene | max depth | threads | epsm samples/s | Mitsuba samples/s | epsm / Mitsuba | mean RGB epsm | mean RGB Mitsuba |")
     print("|---|---|---|---|---|---|---|---|")
     for path in scenes:
+        # epsm first: it rejects a bad scene file with an error naming the field.
+        ours_mean = epsm_mean(args.epsm, path, args.spp)
         text = tomllib.loads(pathlib.Path(path).read_text())
         max_depth = text.get("render", {}).get("max_depth", 8)
         scene, samples = mitsuba_scene(path, args.spp, max_depth)
@@ -240,7 +277,6 @@ def main():
                 theirs, img = mitsuba_run(scene, samples, args.spp, t)
                 rates[t][0].append(ours[t])
                 rates[t][1].append(theirs)
-        ours_mean = epsm_mean(args.epsm, path, args.spp)
         theirs_mean = img.reshape(-1, 3).mean(axis=0)
         fmt = lambda c: " ".join(f"{x:.4f}" for x in c)  # noqa: E731
         for t in threads:
