@@ -3,7 +3,7 @@
 //! over tiles, and optional path recording.
 //!
 //! Determinism: every random number comes from a
-//! [`PixelSampler`](crate::sampler::PixelSampler), keyed by
+//! [`PixelSampler`], keyed by
 //! `(seed, pixel, sample, dimension)`, and each pixel sums its samples in
 //! order, so an image is bit-identical whatever the thread count.
 //!
