@@ -86,9 +86,8 @@ pub fn from_str(text: &str, file: &Path) -> Result<Loaded> {
         let id = b
             .attr("id")
             .ok_or_else(|| ctx.err(&format!("{}.id", b.path), "a top-level <bsdf> needs an id"))?;
-        if defs.insert(id, b).is_some() {
-            return Err(ctx.err(&format!("{}.id", b.path), format!("duplicate id \"{id}\"")));
-        }
+        // Ids are unique (`parse` rejects a repeated one).
+        defs.insert(id, b);
     }
     let mut materials = Materials::default();
     let mut objects = Vec::new();

@@ -85,6 +85,7 @@ pub(crate) fn parse(text: &str, file: &Path) -> Result<Document> {
         file,
         defaults: &defaults,
         spans: &mut spans,
+        ids: HashMap::new(),
         line: &line,
     };
     let root = builder.element(root, "scene".into(), 0)?;
@@ -98,6 +99,8 @@ struct Builder<'a, L> {
     file: &'a Path,
     defaults: &'a HashMap<String, String>,
     spans: &'a mut Vec<(String, Range<usize>)>,
+    /// Each `id` defined so far: the tag and line of its element.
+    ids: HashMap<String, (String, usize)>,
     line: &'a L,
 }
 
@@ -115,6 +118,23 @@ impl<L: Fn(roxmltree::Node) -> usize> Builder<'_, L> {
         for a in node.attributes() {
             let value = substitute(a.value(), self.defaults).map_err(&fail)?;
             attrs.push((a.name().to_owned(), value));
+        }
+        // Ids are unique across the whole scene, whatever the tags (a
+        // `<ref>` names one, it defines none), as Mitsuba requires.
+        let tag = node.tag_name().name();
+        if let Some((_, id)) = attrs.iter().find(|(k, _)| k == "id")
+            && tag != "ref"
+        {
+            let here = (tag.to_owned(), (self.line)(node));
+            if let Some((first, at)) = self.ids.insert(id.clone(), here) {
+                let msg = format!(
+                    "duplicate id \"{id}\": the <{first}> at line {at} has it (Mitsuba \
+                     requires ids unique across the scene)"
+                );
+                return Err(SceneError::new(self.file, format!("{path}.id"), msg)
+                    .at_line((self.line)(node))
+                    .into());
+            }
         }
         self.spans.push((path.clone(), node.range()));
         let mut counts: HashMap<&str, usize> = HashMap::new();
