@@ -30,6 +30,9 @@ pub struct Locator {
     /// Byte offset of the start of each line.
     line_starts: Vec<usize>,
     entries: Vec<Entry>,
+    /// Byte range `toml` gives the document itself, and so the errors about
+    /// its top-level fields: `0..0`, which a table header at offset 0 covers.
+    document: Range<usize>,
 }
 
 impl Locator {
@@ -38,6 +41,7 @@ impl Locator {
         let mut locator = Self {
             line_starts: line_starts(text),
             entries: Vec::new(),
+            document: root.span(),
         };
         locator.walk_table("", root.get_ref());
         locator
@@ -57,6 +61,7 @@ impl Locator {
         Self {
             line_starts: line_starts(text),
             entries,
+            ..Self::default()
         }
     }
 
@@ -100,8 +105,12 @@ impl Locator {
         }
     }
 
-    /// The innermost field whose key or value covers `span`.
+    /// The innermost field whose key or value covers `span`; the top level
+    /// (`""`) for the span of the document itself.
     fn path_at(&self, span: &Range<usize>) -> Option<&str> {
+        if *span == self.document {
+            return Some("");
+        }
         let covers = |r: &Range<usize>| r.start <= span.start && span.end <= r.end;
         self.entries
             .iter()
@@ -223,7 +232,10 @@ fn quoted_after<'a>(message: &'a str, prefix: &str) -> Option<&'a str> {
 
 #[cfg(test)]
 mod tests {
+    use serde::Deserialize;
+
     use super::*;
+    use crate::scene::desc::SceneDesc;
 
     const TEXT: &str = "[camera]\nfov = 40\n\n[[objects]]\nname = \"a\"\n\n[[objects]]\nname = \"b\"\nrotate = [{ axis = [0, 1, 0], angle = 5 }]\n";
 
@@ -256,6 +268,47 @@ mod tests {
         assert_eq!(at("\"b\"").as_deref(), Some("objects[1].name"));
         assert_eq!(at("5").as_deref(), Some("objects[1].rotate[0].angle"));
         assert_eq!(at("40").as_deref(), Some("camera.fov"));
+    }
+
+    /// The field a failed deserialization of scene file `text` names.
+    fn scene_error_field(text: &str) -> String {
+        let root = DeTable::parse(text).expect("valid TOML");
+        let locator = Locator::new(text, &root);
+        let err = SceneDesc::deserialize(toml::de::Deserializer::from(root))
+            .expect_err("an invalid scene");
+        locator.serde_error(Path::new("x.toml"), &err).field
+    }
+
+    #[test]
+    fn missing_top_level_fields_are_named_at_the_top_level_whatever_table_comes_first() {
+        for text in [
+            "",
+            "[render]\nspp = 4\n",
+            "\n[render]\nspp = 4\n",
+            "[render]\nspp = 4\n\n[[objects]]\nname = \"a\"\nshape = \"sphere\"\nmaterial = \"m\"\n",
+            "[materials.m]\ntype = \"diffuse\"\n",
+            "[[objects]]\nname = \"a\"\nshape = \"sphere\"\nmaterial = \"m\"\n",
+            "render = { spp = 4 }\n",
+        ] {
+            assert_eq!(scene_error_field(text), "camera", "{text:?}");
+        }
+    }
+
+    #[test]
+    fn missing_fields_of_a_table_at_the_start_are_named_inside_it() {
+        let camera = "[camera]\norigin = [0, 0, 1]\ntarget = [0, 0, 0]\nresolution = [8, 8]\n";
+        assert_eq!(
+            scene_error_field("[camera]\ntarget = [0, 0, 0]\n"),
+            "camera.origin"
+        );
+        assert_eq!(
+            scene_error_field(&format!("[materials.m]\nior = 1.5\n{camera}")),
+            "materials.m.type"
+        );
+        assert_eq!(
+            scene_error_field(&format!("[[objects]]\nname = \"a\"\n{camera}")),
+            "objects[0].material"
+        );
     }
 
     #[test]
