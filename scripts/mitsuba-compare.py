@@ -1,18 +1,22 @@
 #!/usr/bin/env python3
 """Side by side with Mitsuba 3: renders epsm scene files with `epsm bench render`
-and with Mitsuba 3's LLVM backend (`llvm_ad_rgb`) on the same machine, and prints a
-Markdown table of samples per second and of the two images' mean colours.
+and with Mitsuba 3 (its LLVM backend `llvm_ad_rgb`, or with `--variant scalar_rgb` its
+one-path-at-a-time CPU variant) on the same machine, and prints a Markdown table of
+samples per second and of the two images' mean colours.
 
 Usage (from the repository root, after `cargo build --release`):
 
     python3 -m venv /tmp/mi && /tmp/mi/bin/pip install mitsuba==3.6.4 numpy
     /tmp/mi/bin/python scripts/mitsuba-compare.py [SCENE.toml ...] \
-        [--epsm target/release/epsm] [--spp 256] [--rounds 3] [--threads 1,2]
+        [--epsm target/release/epsm] [--spp 256] [--rounds 3] [--threads 1,2] \
+        [--variant llvm_ad_rgb|scalar_rgb]
 
 Default scenes: every `scenes/*.toml`. Mitsuba's backend needs `libLLVM` (Debian:
 `libllvm15`). Each round runs epsm's bench, then Mitsuba once per thread count
-(`drjit.set_thread_count`); Mitsuba's first render of a scene compiles its kernel,
-so every Mitsuba timing is the best of two renders after a warm-up render. Rounds
+(`drjit.set_thread_count`, and the process pinned to that many CPUs, as the scalar
+variant's thread pool ignores the former); the LLVM
+backend's first render of a scene compiles its kernel, so every Mitsuba timing is
+the best of two renders after a warm-up render. Rounds
 alternate the two renderers, so compare rates within a round on a shared machine.
 
 The scenes are translated from the TOML files rather than loaded from their
@@ -49,8 +53,7 @@ try:
 except ImportError as e:
     sys.exit(f"{e}: this script needs `pip install mitsuba==3.6.4 numpy` (see its header)")
 
-mi.set_variant("llvm_ad_rgb")
-T = mi.ScalarTransform4f
+VARIANTS = ["llvm_ad_rgb", "scalar_rgb"]
 
 PLY_DIR = pathlib.Path(tempfile.mkdtemp(prefix="epsm-mitsuba-"))
 
@@ -96,16 +99,18 @@ def disk(segments):
 
 
 def ply(name, positions, normals, faces):
+    """A binary PLY file of the mesh (written directly: Mitsuba's own writer takes
+    arrays of the LLVM variants' types only)."""
     path = PLY_DIR / f"{name}.ply"
     if not path.exists():
-        mesh = mi.Mesh(name, vertex_count=len(positions), face_count=len(faces),
-                       has_vertex_normals=True)
-        params = mi.traverse(mesh)
-        params["vertex_positions"] = mi.Float(positions.ravel())
-        params["vertex_normals"] = mi.Float(normals.ravel())
-        params["faces"] = mi.UInt32(faces.ravel())
-        params.update()
-        mesh.write_ply(str(path))
+        header = (f"ply\nformat binary_little_endian 1.0\nelement vertex {len(positions)}\n"
+                  + "".join(f"property float {c}\n" for c in ("x", "y", "z", "nx", "ny", "nz"))
+                  + f"element face {len(faces)}\nproperty list uchar uint vertex_indices\n"
+                  + "end_header\n")
+        vertices = np.hstack([positions, normals]).astype("<f4")
+        rows = np.zeros(len(faces), dtype=[("n", "u1"), ("i", "<u4", 3)])
+        rows["n"], rows["i"] = 3, faces
+        path.write_bytes(header.encode() + vertices.tobytes() + rows.tobytes())
     return str(path)
 
 
@@ -114,11 +119,11 @@ def refuse(scene, what):
 
 
 def to_world(obj):
-    m = T().translate(obj.get("translate", [0.0, 0.0, 0.0]))
+    m = mi.ScalarTransform4f().translate(obj.get("translate", [0.0, 0.0, 0.0]))
     for r in reversed(obj.get("rotate", [])):
-        m = m @ T().rotate(r["axis"], r["angle"])
+        m = m @ mi.ScalarTransform4f().rotate(r["axis"], r["angle"])
     s = obj.get("scale", 1.0)
-    return m @ T().scale(s if isinstance(s, list) else [s, s, s])
+    return m @ mi.ScalarTransform4f().scale(s if isinstance(s, list) else [s, s, s])
 
 
 def bsdf(scene, mat):
@@ -172,7 +177,7 @@ def mitsuba_scene(path, spp, max_depth):
         "integrator": {"type": "path", "max_depth": max_depth + 1, "rr_depth": render.get("rr_depth", 3)},
         "sensor": {
             "type": "perspective", "fov": cam.get("fov", 40.0), "fov_axis": "y",
-            "to_world": T().look_at(origin=cam["origin"], target=cam["target"], up=cam.get("up", [0, 1, 0])),
+            "to_world": mi.ScalarTransform4f().look_at(origin=cam["origin"], target=cam["target"], up=cam.get("up", [0, 1, 0])),
             "sampler": {"type": "independent", "sample_count": spp},
             "film": {"type": "hdrfilm", "width": width, "height": height, "rfilter": {"type": "box"}},
         },
@@ -190,16 +195,32 @@ def mitsuba_scene(path, spp, max_depth):
     return mi.load_dict(d), width * height * spp
 
 
+def pin(cpus):
+    """Restricts every thread of this process to the CPUs `cpus`."""
+    for tid in os.listdir("/proc/self/task"):
+        try:
+            os.sched_setaffinity(int(tid), cpus)
+        except ProcessLookupError:
+            pass  # a thread that has ended
+
+
 def mitsuba_run(scene, samples, spp, threads):
-    """Best samples/s of two renders after a warm-up (kernel compilation), and the image."""
+    """Best samples/s of two renders after a warm-up (kernel compilation), and the image.
+    The process runs on `threads` CPUs meanwhile: the scalar variant's thread pool uses
+    every core whatever `drjit.set_thread_count` says."""
     dr.set_thread_count(threads)
+    cpus = os.sched_getaffinity(0)
+    pin(set(sorted(cpus)[:threads]))
     times, img = [], None
-    for seed in range(3):
-        start = time.perf_counter()
-        img = mi.render(scene, spp=spp, seed=seed)
-        dr.eval(img)
-        dr.sync_thread()
-        times.append(time.perf_counter() - start)
+    try:
+        for seed in range(3):
+            start = time.perf_counter()
+            img = mi.render(scene, spp=spp, seed=seed)
+            dr.eval(img)
+            dr.sync_thread()
+            times.append(time.perf_counter() - start)
+    finally:
+        pin(cpus)
     return samples / min(times[1:]), np.array(img, dtype=np.float64)[..., :3]
 
 
@@ -258,9 +279,14 @@ def main():
     ap.add_argument("--rounds", type=positive, default=3)
     ap.add_argument("--threads", type=thread_counts, default="1,2",
                     help="thread counts, comma-separated: 1 and the CPU count, which epsm's bench runs")
+    ap.add_argument("--variant", choices=VARIANTS, default=VARIANTS[0],
+                    help="Mitsuba variant: its LLVM backend (many paths per vector instruction) or "
+                         "its scalar CPU variant (one path at a time)")
     args = ap.parse_args()
+    mi.set_variant(args.variant)
     scenes = args.scenes or sorted(str(p) for p in pathlib.Path("scenes").glob("*.toml"))
     threads = args.threads
+    print(f"Mitsuba variant: `{args.variant}`\n")
     print("| scene | max depth | threads | epsm samples/s | Mitsuba samples/s | epsm / Mitsuba | mean RGB epsm | mean RGB Mitsuba |")
     print("|---|---|---|---|---|---|---|---|")
     for path in scenes:
