@@ -11,9 +11,10 @@
 //! | `integrator type="path"` `max_depth` | `max_depth = max_depth − 1` (epsm counts scatterings, Mitsuba path segments) | −1 = unlimited → `MAX_DEPTH` |
 //! | `integrator` `rr_depth` | `rr_depth` (same meaning) | 5 |
 //!
-//! `near_clip`, `far_clip` and film settings that only affect the output
-//! file (`rfilter`, `pixel_format`, `component_format`, `file_format`) are
-//! skipped with a warning.
+//! A film's `<rfilter type="box"/>` is epsm's own pixel filter; other
+//! reconstruction filters, `near_clip`, `far_clip` and film settings that
+//! only affect the output file (`pixel_format`, `component_format`,
+//! `file_format`) are skipped with a warning.
 //!
 //! ```xml
 //! <sensor type="perspective">
@@ -59,11 +60,21 @@ pub(crate) fn sensor(
                 })
             };
             let size = (size("width", 768)?, size("height", 576)?);
+            // A box filter is epsm's own (a sample counts for the pixel it
+            // falls in, with weight one); any other is not used.
+            for rfilter in film.tagged("rfilter") {
+                let kind = rfilter.attr("type").unwrap_or_default();
+                if kind != "box" || !rfilter.children.is_empty() {
+                    let msg = format!(
+                        "<rfilter type=\"{kind}\"> is skipped (epsm's pixels are box-filtered)"
+                    );
+                    warnings.push(ctx.located(&rfilter.path, msg));
+                }
+            }
             finish(
                 film,
                 ctx,
                 &[
-                    "rfilter",
                     "pixel_format",
                     "component_format",
                     "file_format",
