@@ -125,14 +125,14 @@ impl<L: Fn(roxmltree::Node) -> usize> Builder<'_, L> {
         if let Some((_, id)) = attrs.iter().find(|(k, _)| k == "id")
             && tag != "ref"
         {
-            let here = (tag.to_owned(), (self.line)(node));
-            if let Some((first, at)) = self.ids.insert(id.clone(), here) {
+            let line = (self.line)(node);
+            if let Some((first, at)) = self.ids.insert(id.clone(), (tag.to_owned(), line)) {
                 let msg = format!(
                     "duplicate id \"{id}\": the <{first}> at line {at} has it (Mitsuba \
                      requires ids unique across the scene)"
                 );
                 return Err(SceneError::new(self.file, format!("{path}.id"), msg)
-                    .at_line((self.line)(node))
+                    .at_line(line)
                     .into());
             }
         }
