@@ -47,12 +47,14 @@ standard deviation 1, about 0.3 % beyond ±3 and none beyond ±5. Blocks that ar
 constant in both renderers (background seen directly) have no noise to compare
 against; the table gives their largest relative difference instead. The script
 warns when a z-score exceeds 5, when their standard deviation is off 1 by more than
-0.3, or when their mean is more than 5 / sqrt(count) from 0 (a shift of the whole
-image; the mean of count standard normals spreads by 1 / sqrt(count), a little
-more here because skewed noise, such as a caustic's, makes a block's mean and its
-variance estimate move together). Moving the caustic box's light by 2 cm in epsm's
-copy only gives a z mean of -0.6 over 768 z-scores (16 / sqrt(768)) at 256 spp and
-4 seeds; its sphere's IOR 1.45 instead of 1.5, a largest |z| of 22.
+0.3, or when their mean is more than 8 / sqrt(count) from 0 (a shift of the whole
+image). The mean of count standard normals spreads by 1 / sqrt(count); here it
+spreads about twice as much (over fourteen checks of the six shipped scenes at 1024
+and 4096 spp, the z mean times sqrt(count) ranged from -3.7 to +3.1, root mean
+square 1.8), because skewed noise, such as a caustic's, makes a block's mean and its variance
+estimate move together. Moving the caustic box's light by 2 cm in epsm's copy only
+gives a z mean of -0.6 over 768 z-scores (-16.5 / sqrt(768)) at 256 spp and 4 seeds;
+its sphere's IOR 1.45 instead of 1.5, a largest |z| of 22.
 """
 import argparse
 import json
@@ -312,7 +314,7 @@ def pixel_check(binary, path, spp, seeds):
     row = (f"| `{path}` | {spp} × {seeds} | {z.size} | {z.mean():+.3f} | {z.std():.3f} "
            f"| {np.sum(np.abs(z) > 3)} | {worst:.2f} | {constant.sum()} "
            f"| {rel.max(initial=0.0):.1e} |")
-    if worst > 5 or abs(z.std() - 1) > 0.3 or abs(z.mean()) * math.sqrt(z.size) > 5:
+    if worst > 5 or abs(z.std() - 1) > 0.3 or abs(z.mean()) * math.sqrt(z.size) > 8:
         print(f"warning: {path}: the block z-scores are not those of noise (largest |z| "
               f"{worst:.2f}, mean {z.mean():+.3f}, standard deviation {z.std():.3f})",
               file=sys.stderr)
