@@ -35,7 +35,8 @@ pub struct CompareArgs {
     /// `--iterations` so that fast methods use the whole budget).
     #[arg(long, value_name = "SECONDS")]
     pub time_budget: Option<f64>,
-    /// Also print the results as Markdown table rows (for docs/results.md).
+    /// Print the results as Markdown table rows instead of CSV (for
+    /// docs/results.md).
     #[arg(long)]
     pub markdown: bool,
 }
