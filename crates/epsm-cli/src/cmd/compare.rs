@@ -55,10 +55,19 @@ pub fn run(args: &CompareArgs) -> anyhow::Result<()> {
         .and_then(|s| s.to_str())
         .unwrap_or("problem")
         .to_owned();
+    // Every method's problem first, so that a bad `--methods` entry fails
+    // before any run.
+    let problems = args
+        .methods
+        .iter()
+        .map(|method| {
+            let mut p = base.clone();
+            apply_overrides(&mut p, args.iterations, Some(method), args.seed)?;
+            Ok((method, p))
+        })
+        .collect::<anyhow::Result<Vec<_>>>()?;
     let mut runs: Vec<(String, Summary)> = Vec::new();
-    for method in &args.methods {
-        let mut p = base.clone();
-        apply_overrides(&mut p, args.iterations, Some(method), args.seed)?;
+    for (method, p) in problems {
         eprintln!("{name}: running {method}");
         let s = optimize(p, &out.join(method), false, args.time_budget)?;
         runs.push((method.clone(), s));
