@@ -153,3 +153,19 @@ fn compare_rejects_an_unknown_method_before_running_any() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn resuming_from_a_folder_without_a_checkpoint_fails_and_creates_nothing() {
+    let dir = std::env::temp_dir().join(format!("epsm-resume-missing-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let problem = tiny();
+    let run = epsm(&[
+        "optimize",
+        problem.to_str().expect("utf-8"),
+        "--resume",
+        dir.to_str().expect("utf-8 path"),
+    ]);
+    assert_eq!(run.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&run.stderr).contains("checkpoint.json"));
+    assert!(!dir.exists(), "the failed resume created {}", dir.display());
+}
