@@ -129,3 +129,43 @@ fn compare_under_a_time_budget_stops_every_method_at_the_budget() {
     assert!(String::from_utf8_lossy(&bad.stderr).contains("--time-budget"));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn compare_rejects_an_unknown_method_before_running_any() {
+    let dir = std::env::temp_dir().join(format!("epsm-compare-bad-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let problem = tiny();
+    let run = epsm(&[
+        "compare",
+        problem.to_str().expect("utf-8"),
+        "--methods",
+        "epsm,foo",
+        "--out",
+        dir.to_str().expect("utf-8 path"),
+        "--iterations",
+        "1",
+    ]);
+    assert_eq!(run.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&run.stderr).contains("--method `foo`"));
+    assert!(
+        !dir.join("epsm").exists(),
+        "epsm ran before the bad method was noticed"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn resuming_from_a_folder_without_a_checkpoint_fails_and_creates_nothing() {
+    let dir = std::env::temp_dir().join(format!("epsm-resume-missing-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let problem = tiny();
+    let run = epsm(&[
+        "optimize",
+        problem.to_str().expect("utf-8"),
+        "--resume",
+        dir.to_str().expect("utf-8 path"),
+    ]);
+    assert_eq!(run.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&run.stderr).contains("checkpoint.json"));
+    assert!(!dir.exists(), "the failed resume created {}", dir.display());
+}

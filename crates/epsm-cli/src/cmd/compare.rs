@@ -35,7 +35,8 @@ pub struct CompareArgs {
     /// `--iterations` so that fast methods use the whole budget).
     #[arg(long, value_name = "SECONDS")]
     pub time_budget: Option<f64>,
-    /// Also print the results as Markdown table rows (for docs/results.md).
+    /// Print the results as Markdown table rows instead of CSV (for
+    /// docs/results.md).
     #[arg(long)]
     pub markdown: bool,
 }
@@ -54,10 +55,19 @@ pub fn run(args: &CompareArgs) -> anyhow::Result<()> {
         .and_then(|s| s.to_str())
         .unwrap_or("problem")
         .to_owned();
+    // Every method's problem first, so that a bad `--methods` entry fails
+    // before any run.
+    let problems = args
+        .methods
+        .iter()
+        .map(|method| {
+            let mut p = base.clone();
+            apply_overrides(&mut p, args.iterations, Some(method), args.seed)?;
+            Ok((method, p))
+        })
+        .collect::<anyhow::Result<Vec<_>>>()?;
     let mut runs: Vec<(String, Summary)> = Vec::new();
-    for method in &args.methods {
-        let mut p = base.clone();
-        apply_overrides(&mut p, args.iterations, Some(method), args.seed)?;
+    for (method, p) in problems {
         eprintln!("{name}: running {method}");
         let s = optimize(p, &out.join(method), false, args.time_budget)?;
         runs.push((method.clone(), s));

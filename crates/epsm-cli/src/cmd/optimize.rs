@@ -143,11 +143,15 @@ pub fn optimize(
     }
     let every = problem.checkpoint_every;
     let preview_spp = problem.passes.spp_primal.max(16);
+    let checkpoint = out.join("checkpoint.json");
+    // Read the checkpoint before the target render and before creating the
+    // folder: a wrong `--resume DIR` fails at once and leaves nothing behind.
+    let resumed = resume
+        .then(|| Optimization::load_checkpoint(&checkpoint))
+        .transpose()?;
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let mut opt = Optimization::new(problem)?;
-    let checkpoint = out.join("checkpoint.json");
-    if resume {
-        let c = Optimization::load_checkpoint(&checkpoint)?;
+    if let Some(c) = resumed {
         opt.restore(c)?;
     } else {
         save(out, "target", opt.target())?;

@@ -12,7 +12,7 @@ use crate::progress;
 /// Arguments of `epsm render`.
 #[derive(clap::Args, Debug)]
 pub struct RenderArgs {
-    /// The scene file (TOML).
+    /// The scene file: TOML, glTF (`.gltf`, `.glb`) or Mitsuba 3 (`.xml`).
     pub scene: PathBuf,
     /// Output image: `.exr` (linear float) or `.png` (sRGB, 8-bit).
     #[arg(short, long, default_value = "render.exr")]

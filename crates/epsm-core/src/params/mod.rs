@@ -16,6 +16,10 @@
 //! | `ior` | object or material | — | file value | dielectric IOR |
 //! | `emission` | object | factor | 1 | emitted radiance scale |
 //!
+//! A material or emission key whose material or object has no such value
+//! (`alpha` of a diffuse material, `emission` of a non-emissive object) is
+//! an [`Error::Param`]: it would drive nothing.
+//!
 //! An object's driven transform is
 //! `M(θ) = Tr(t) · P · R_z R_y R_x · S(s) · P⁻¹ · M_file` with `P` the
 //! translation to the pivot (default: the centre of the object's world bounds
@@ -120,7 +124,10 @@ impl ParamTable {
             return Err(Error::Duplicate(key.to_owned()));
         }
         let target = parse(&self.names, key)?;
-        let value = self.default_value(target);
+        let value = self.default_value(target).map_err(|message| Error::Param {
+            key: key.to_owned(),
+            message,
+        })?;
         self.params.push(Param {
             key: key.to_owned(),
             target,
@@ -254,29 +261,47 @@ impl ParamTable {
         }
     }
 
-    fn default_value(&self, target: Target) -> f64 {
-        let material = |m: MaterialId| &self.base.materials[m as usize].bsdf;
+    /// The value `target` starts at: the file's value, or the identity of
+    /// an offset or factor. A material or emission target that the scene
+    /// gives no such value (roughness of a diffuse material, emission of an
+    /// object that emits nothing) is an error, since the parameter would
+    /// drive nothing.
+    fn default_value(&self, target: Target) -> std::result::Result<f64, String> {
+        let material = |m: MaterialId| &self.base.materials[m as usize];
+        let mismatch = |m: MaterialId, what: &str| {
+            format!(
+                "material `{}` is not {what}, so this parameter would change nothing",
+                material(m).name
+            )
+        };
         match target {
-            Target::Scale { .. } | Target::Emission { .. } => 1.0,
+            Target::Scale { .. } => Ok(1.0),
+            Target::Emission { object } => match self.base.emission[object as usize] {
+                Some(_) => Ok(1.0),
+                None => Err(format!(
+                    "object `{}` is not emissive, so this parameter would change nothing",
+                    self.names.objects[object as usize]
+                )),
+            },
             Target::Albedo {
                 material: m,
                 channel,
-            } => match material(m) {
+            } => match &material(m).bsdf {
                 Bsdf::Diffuse(d) => match &d.albedo {
-                    Texture::Constant(c) => f64::from(c[channel]),
-                    Texture::Image(_) => 0.0,
+                    Texture::Constant(c) => Ok(f64::from(c[channel])),
+                    Texture::Image(_) => Err(mismatch(m, "diffuse with a constant albedo")),
                 },
-                _ => 0.0,
+                _ => Err(mismatch(m, "diffuse with a constant albedo")),
             },
-            Target::Alpha { material: m } => match material(m) {
-                Bsdf::RoughConductor(r) => f64::from(r.alpha),
-                _ => 0.0,
+            Target::Alpha { material: m } => match &material(m).bsdf {
+                Bsdf::RoughConductor(r) => Ok(f64::from(r.alpha)),
+                _ => Err(mismatch(m, "a rough conductor")),
             },
-            Target::Ior { material: m } => match material(m) {
-                Bsdf::Dielectric(d) => f64::from(d.ior),
-                _ => 1.0,
+            Target::Ior { material: m } => match &material(m).bsdf {
+                Bsdf::Dielectric(d) => Ok(f64::from(d.ior)),
+                _ => Err(mismatch(m, "a dielectric")),
             },
-            _ => 0.0,
+            _ => Ok(0.0),
         }
     }
 }

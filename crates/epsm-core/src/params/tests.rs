@@ -67,6 +67,28 @@ fn keys_resolve_and_bad_keys_are_errors_naming_the_key() {
 }
 
 #[test]
+fn material_and_emission_keys_that_drive_nothing_are_errors() {
+    // `box` and `paint` are a diffuse, non-emissive object and material:
+    // roughness, IOR and emission keys would be accepted and then ignored.
+    let s = scene();
+    let mut t = ParamTable::new(&s);
+    for (bad, expected) in [
+        ("box.alpha", "rough conductor"),
+        ("paint.ior", "dielectric"),
+        ("box.emission", "emissive"),
+    ] {
+        match t.add(bad) {
+            Err(Error::Param { key, message }) => {
+                assert_eq!(key, bad);
+                assert!(message.contains(expected), "{bad}: {message}");
+            }
+            other => panic!("{bad}: {other:?}"),
+        }
+    }
+    assert!(t.is_empty());
+}
+
+#[test]
 fn apply_writes_transforms_lights_camera_and_colours_into_the_scene() {
     let mut s = scene();
     let mut t = ParamTable::new(&s);

@@ -212,7 +212,7 @@ pub struct ObjectDesc {
     pub name: String,
     /// A built-in shape (exactly one of `shape` and `mesh`).
     pub shape: Option<ShapeKind>,
-    /// A mesh file (`.obj`, `.gltf`, `.glb`), relative to the scene file.
+    /// A mesh file (`.obj`, `.ply`, `.gltf`, `.glb`), relative to the scene file.
     pub mesh: Option<String>,
     /// Sphere: icosphere levels (default 3, ≤ 8); disk: segments (default 64, ≥ 3).
     pub subdivisions: Option<u32>,
