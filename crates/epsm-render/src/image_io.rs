@@ -67,6 +67,30 @@ pub fn read_image(path: &Path) -> Result<Image> {
     }
 }
 
+/// Checks that every channel of every pixel of `img`, read from `path`, is
+/// finite and in `[0, max]` (`max` may be infinite); the error names the
+/// first pixel that is not.
+pub fn check_values(path: &Path, img: &Image, max: f32) -> Result<()> {
+    let bad = img.pixels.iter().enumerate().find_map(|(i, p)| {
+        p.to_array()
+            .into_iter()
+            .zip(["r", "g", "b"])
+            .find(|(v, _)| !(v.is_finite() && (0.0..=max).contains(v)))
+            .map(|(v, channel)| (i, channel, v))
+    });
+    let Some((i, channel, v)) = bad else {
+        return Ok(());
+    };
+    let (x, y) = (i % img.width as usize, i / img.width as usize);
+    let range = if max.is_finite() {
+        format!("finite values in [0, {max}]")
+    } else {
+        "finite values >= 0".to_owned()
+    };
+    let msg = format!("pixel ({x}, {y}) has {channel} = {v}; expected {range}");
+    Err(image_error(path, msg))
+}
+
 /// Writes `img` as PNG (sRGB, 8-bit, clamped) or EXR (32-bit float RGB),
 /// chosen by `path`'s extension, atomically. The directory must exist.
 pub fn write_image(path: &Path, img: &Image) -> Result<()> {
@@ -339,6 +363,28 @@ mod tests {
             err.contains("huge.exr") && err.contains("declares a 60001x60001 layer"),
             "{err}"
         );
+    }
+
+    #[test]
+    fn check_values_names_the_first_pixel_outside_the_range() {
+        let path = Path::new("t.exr");
+        let mut img = test_image();
+        assert!(check_values(path, &img, 1.0).is_ok());
+        img.set(3, 1, Vec3::new(0.5, f32::NAN, 2.0));
+        img.set(4, 2, Vec3::new(-1.0, 0.0, 0.0));
+        let err = check_values(path, &img, f32::INFINITY).expect_err("nan");
+        assert_eq!(
+            err.to_string(),
+            "t.exr: pixel (3, 1) has g = NaN; expected finite values >= 0"
+        );
+        img.set(3, 1, Vec3::new(0.5, 0.5, 2.0));
+        let err = check_values(path, &img, 1.0).expect_err("above one");
+        assert_eq!(
+            err.to_string(),
+            "t.exr: pixel (3, 1) has b = 2; expected finite values in [0, 1]"
+        );
+        let err = check_values(path, &img, f32::INFINITY).expect_err("negative");
+        assert!(err.to_string().contains("pixel (4, 2) has r = -1"), "{err}");
     }
 
     #[test]
