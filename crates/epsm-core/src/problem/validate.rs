@@ -133,7 +133,12 @@ pub(super) fn problem(d: &ProblemDesc, file: &Path, locator: &Locator) -> OptRes
     }
     let target = match &d.target.image {
         Some(path) => {
-            let img = epsm_render::image_io::read_image(&base.join(path))
+            let path = base.join(path);
+            let img = epsm_render::image_io::read_image(&path)
+                .and_then(|img| {
+                    epsm_render::image_io::check_values(&path, &img, f32::INFINITY)?;
+                    Ok(img)
+                })
                 .map_err(|e| c.err("target.image", e.to_string()))?;
             let cam = &scene.camera;
             if (img.width, img.height) != (cam.width, cam.height) {
