@@ -147,8 +147,7 @@ pub fn optimize(
     let mut opt = Optimization::new(problem)?;
     let checkpoint = out.join("checkpoint.json");
     if resume {
-        let c = Optimization::load_checkpoint(&checkpoint)?;
-        opt.restore(c)?;
+        opt.resume(&checkpoint)?;
     } else {
         save(out, "target", opt.target())?;
         save(out, "initial", &opt.render(preview_spp))?;
