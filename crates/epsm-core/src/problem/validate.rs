@@ -93,10 +93,12 @@ pub(super) fn problem(d: &ProblemDesc, file: &Path, locator: &Locator) -> OptRes
                 .err(&f("key"), format!("`{}` is listed twice", p.key))
                 .into());
         }
-        table
-            .clone()
+        let mut probe_table = table.clone();
+        let index = probe_table
             .add(&p.key)
             .map_err(|e| c.err(&f("key"), e.to_string()))?;
+        let (domain, range) = probe_table.params()[index].target.domain();
+        let within_domain = |v: f64| v >= domain[0] && v <= domain[1];
         let bounds = match p.bounds {
             Some([lo, hi]) => {
                 c.finite(&f("bounds"), lo)?;
@@ -106,18 +108,25 @@ pub(super) fn problem(d: &ProblemDesc, file: &Path, locator: &Locator) -> OptRes
                     hi > lo,
                     "an upper bound above the lower one",
                 )?;
+                for v in [lo, hi] {
+                    c.check(&f("bounds"), v, within_domain(v), range)?;
+                }
                 [lo, hi]
             }
-            None => [-f64::MAX, f64::MAX],
+            None => domain,
+        };
+        let what = match p.bounds {
+            Some(_) => "a value within `bounds`",
+            None => range,
         };
         let inside = |v: f64| v >= bounds[0] && v <= bounds[1];
         let initial = p
             .initial
-            .map(|v| c.check(&f("initial"), v, inside(v), "a value within `bounds`"))
+            .map(|v| c.check(&f("initial"), v, inside(v), what))
             .transpose()?;
         let true_value = p
             .true_value
-            .map(|v| c.check(&f("true"), v, inside(v), "a value within `bounds`"))
+            .map(|v| c.check(&f("true"), v, inside(v), what))
             .transpose()?;
         let lr =
             p.lr.map(|v| c.check(&f("lr"), v, v > 0.0, "a positive number"))

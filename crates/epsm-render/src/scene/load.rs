@@ -33,6 +33,7 @@ use std::path::Path;
 
 use serde::de::DeserializeOwned;
 
+pub use check::MIN_ALPHA;
 pub use locate::Locator;
 
 use crate::error::{Error, Result, SceneError};
