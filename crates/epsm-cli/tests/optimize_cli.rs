@@ -129,3 +129,42 @@ fn compare_under_a_time_budget_stops_every_method_at_the_budget() {
     assert!(String::from_utf8_lossy(&bad.stderr).contains("--time-budget"));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn sample_counts_outside_their_range_are_errors_before_any_work() {
+    let problem = tiny();
+    let problem = problem.to_str().expect("utf-8");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/tiny-box.toml");
+    let scene = scene.to_str().expect("utf-8");
+    let dir = std::env::temp_dir().join(format!("epsm-grad-spp0-{}", std::process::id()));
+    let out = dir.to_str().expect("utf-8 path");
+    for (args, expected) in [
+        (
+            vec!["check", scene, "--samples", "4000000000"],
+            "--samples must be in [1, 1048576], got 4000000000",
+        ),
+        (
+            vec!["check", scene, "--samples", "0"],
+            "--samples must be in [1, 1048576], got 0",
+        ),
+        (
+            vec![
+                "grad",
+                problem,
+                "--param",
+                "box.translate.x",
+                "--spp",
+                "0",
+                "--out",
+                out,
+            ],
+            "--spp must be at least 1",
+        ),
+    ] {
+        let run = epsm(&args);
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert_eq!(run.status.code(), Some(1), "{args:?}: {stderr}");
+        assert!(stderr.contains(expected), "{args:?}: {stderr}");
+    }
+    assert!(!dir.exists(), "grad wrote {out} before rejecting --spp 0");
+}
