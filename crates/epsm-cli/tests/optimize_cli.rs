@@ -131,7 +131,7 @@ fn compare_under_a_time_budget_stops_every_method_at_the_budget() {
 }
 
 #[test]
-fn sample_counts_outside_their_range_are_errors_before_any_work() {
+fn counts_outside_their_range_are_errors_before_any_work() {
     let problem = tiny();
     let problem = problem.to_str().expect("utf-8");
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/tiny-box.toml");
@@ -159,6 +159,26 @@ fn sample_counts_outside_their_range_are_errors_before_any_work() {
                 out,
             ],
             "--spp must be at least 1",
+        ),
+        (
+            vec!["bench", "rays", "--triangles", "4000000000"],
+            "--triangles must be in [20, 4194304], got 4000000000",
+        ),
+        (
+            vec!["bench", "rays", "--rays", "4000000000000"],
+            "--rays must be in [1, 33554432], got 4000000000000",
+        ),
+        (
+            vec!["bench", "ot", "--n", "4000000000"],
+            "--n must be in [1, 4194304], got 4000000000",
+        ),
+        (
+            vec!["bench", "render", scene, "--repeats", "0"],
+            "--repeats must be at least 1",
+        ),
+        (
+            vec!["bench", "manifold", scene, "--seconds", "nan"],
+            "--seconds must be a positive number, got NaN",
         ),
     ] {
         let run = epsm(&args);

@@ -48,7 +48,7 @@ pub struct CheckArgs {
 
 /// Most pixel samples `epsm check` traces: each keeps its whole path record
 /// (about 0.6 kB), so 2^20 of them take about 0.7 GB.
-const MAX_SAMPLES: u32 = 1 << 20;
+pub(crate) const MAX_SAMPLES: u32 = 1 << 20;
 
 /// Runs `epsm check`.
 pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
