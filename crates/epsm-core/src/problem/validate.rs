@@ -3,6 +3,7 @@
 
 use std::path::Path;
 
+use epsm_ot::MIN_BLUR;
 use epsm_render::scene::load::{Locator, load_parts, parts_from_desc};
 use epsm_render::{Error, Scene, SceneError};
 
@@ -174,7 +175,7 @@ pub(super) fn problem(d: &ProblemDesc, file: &Path, locator: &Locator) -> OptRes
     let kind = match l.kind.as_str() {
         "ot_exact" => LossKind::OtExact,
         "ot_sinkhorn" => LossKind::OtSinkhorn {
-            blur: c.check("loss.blur", l.blur, l.blur > 0.0, "a positive number")?,
+            blur: c.check("loss.blur", l.blur, l.blur >= MIN_BLUR, "a number >= 1e-4")?,
         },
         "l2" => LossKind::L2,
         other => {
@@ -228,7 +229,12 @@ pub(super) fn problem(d: &ProblemDesc, file: &Path, locator: &Locator) -> OptRes
         target,
         loss: LossSettings {
             kind,
-            lambda: c.check("loss.lambda", l.lambda, l.lambda > 0.0, "a positive number")?,
+            lambda: c.check(
+                "loss.lambda",
+                l.lambda,
+                l.lambda > 0.0 && l.lambda <= f64::from(f32::MAX),
+                "a positive number of at most 3.4e38",
+            )?,
             match_resolution: [mw, mh],
             flow: l.flow,
         },
