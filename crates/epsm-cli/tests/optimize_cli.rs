@@ -169,3 +169,62 @@ fn resuming_from_a_folder_without_a_checkpoint_fails_and_creates_nothing() {
     assert!(String::from_utf8_lossy(&run.stderr).contains("checkpoint.json"));
     assert!(!dir.exists(), "the failed resume created {}", dir.display());
 }
+
+#[test]
+fn counts_outside_their_range_are_errors_before_any_work() {
+    let problem = tiny();
+    let problem = problem.to_str().expect("utf-8");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/tiny-box.toml");
+    let scene = scene.to_str().expect("utf-8");
+    let dir = std::env::temp_dir().join(format!("epsm-grad-spp0-{}", std::process::id()));
+    let out = dir.to_str().expect("utf-8 path");
+    for (args, expected) in [
+        (
+            vec!["check", scene, "--samples", "4000000000"],
+            "--samples must be in [1, 1048576], got 4000000000",
+        ),
+        (
+            vec!["check", scene, "--samples", "0"],
+            "--samples must be in [1, 1048576], got 0",
+        ),
+        (
+            vec![
+                "grad",
+                problem,
+                "--param",
+                "box.translate.x",
+                "--spp",
+                "0",
+                "--out",
+                out,
+            ],
+            "--spp must be at least 1",
+        ),
+        (
+            vec!["bench", "rays", "--triangles", "4000000000"],
+            "--triangles must be in [20, 4194304], got 4000000000",
+        ),
+        (
+            vec!["bench", "rays", "--rays", "4000000000000"],
+            "--rays must be in [1, 33554432], got 4000000000000",
+        ),
+        (
+            vec!["bench", "ot", "--n", "4000000000"],
+            "--n must be in [1, 4194304], got 4000000000",
+        ),
+        (
+            vec!["bench", "render", scene, "--repeats", "0"],
+            "--repeats must be at least 1",
+        ),
+        (
+            vec!["bench", "manifold", scene, "--seconds", "nan"],
+            "--seconds must be a positive number, got NaN",
+        ),
+    ] {
+        let run = epsm(&args);
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert_eq!(run.status.code(), Some(1), "{args:?}: {stderr}");
+        assert!(stderr.contains(expected), "{args:?}: {stderr}");
+    }
+    assert!(!dir.exists(), "grad wrote {out} before rejecting --spp 0");
+}

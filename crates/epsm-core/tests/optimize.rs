@@ -192,3 +192,43 @@ fn a_checkpoint_file_gives_back_every_value_bit_for_bit() {
         assert!(changed.is_empty(), "{name}: written, read: {changed:?}");
     }
 }
+
+#[test]
+fn a_checkpoint_that_does_not_fit_the_problem_is_rejected_naming_the_field() {
+    let mut p = tiny(TRANSLATE);
+    p.optimizer.iterations = 2;
+    let mut run = Optimization::new(p.clone()).expect("setup");
+    run.step().expect("iteration");
+    let good = run.checkpoint();
+    type Edit = fn(&mut epsm_core::Checkpoint);
+    let cases: [(&str, Edit); 8] = [
+        ("adam.m: 0 entries", |c| c.adam.m.clear()),
+        ("adam.v: 0 entries", |c| c.adam.v.clear()),
+        ("adam.settings", |c| c.adam.settings.lr.clear()),
+        ("adam.settings", |c| c.adam.settings.beta1 = 1.0),
+        ("adam.t", |c| c.adam.t = c.adam.iteration + 1),
+        ("theta[0]: 50 is outside the bounds", |c| c.theta[0] = 50.0),
+        ("wall_s", |c| c.wall_s = -1.0),
+        ("rows: 0 rows for 1 iterations", |c| c.rows.clear()),
+    ];
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = dir.path().join("checkpoint.json");
+    for (expected, edit) in cases {
+        let mut c = good.clone();
+        edit(&mut c);
+        std::fs::write(&path, serde_json::to_vec(&c).expect("serialise")).expect("write");
+        let mut resumed = Optimization::new(p.clone()).expect("setup");
+        let read = Optimization::load_checkpoint(&path).expect("read");
+        let err = resumed.resume(&path, read).expect_err(expected).to_string();
+        assert!(
+            err.contains("checkpoint.json") && err.contains(expected),
+            "{expected}: {err}"
+        );
+    }
+    std::fs::write(&path, serde_json::to_vec(&good).expect("serialise")).expect("write");
+    let mut resumed = Optimization::new(p).expect("setup");
+    let read = Optimization::load_checkpoint(&path).expect("read");
+    resumed
+        .resume(&path, read)
+        .expect("the unedited checkpoint resumes");
+}

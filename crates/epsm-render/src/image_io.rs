@@ -6,7 +6,9 @@
 //! | `.exr` | first RGB(A) layer, linear; alpha ignored | 32-bit float RGB, exact (non-finite values kept); RLE tiles of 64², written in increasing order so the bytes depend only on the pixels |
 //!
 //! The format is chosen by the (case-insensitive) extension; anything else is
-//! an error. Writes are atomic: the image goes to a temporary file in the
+//! an error. A read image has at most [`MAX_IMAGE_PIXELS`] pixels: an EXR
+//! declaring more is rejected from its header, before anything is allocated
+//! (PNG decoding has the `image` crate's memory limit). Writes are atomic: the image goes to a temporary file in the
 //! target's directory which is then renamed over the target, so a reader
 //! never sees a half-written file and a failed write leaves nothing behind.
 //! sRGB transfer functions follow IEC 61966-2-1.
@@ -19,6 +21,9 @@ use image::ImageEncoder;
 
 use crate::error::{Error, Result};
 use crate::film::Image;
+
+/// Most pixels of an image read by [`read_image`] (16384 × 8192).
+pub const MAX_IMAGE_PIXELS: usize = 1 << 27;
 
 /// The image formats this module reads and writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -60,6 +65,30 @@ pub fn read_image(path: &Path) -> Result<Image> {
         Format::Png => read_png(path),
         Format::Exr => read_exr(path),
     }
+}
+
+/// Checks that every channel of every pixel of `img`, read from `path`, is
+/// finite and in `[0, max]` (`max` may be infinite); the error names the
+/// first pixel that is not.
+pub fn check_values(path: &Path, img: &Image, max: f32) -> Result<()> {
+    let bad = img.pixels.iter().enumerate().find_map(|(i, p)| {
+        p.to_array()
+            .into_iter()
+            .zip(["r", "g", "b"])
+            .find(|(v, _)| !(v.is_finite() && (0.0..=max).contains(v)))
+            .map(|(v, channel)| (i, channel, v))
+    });
+    let Some((i, channel, v)) = bad else {
+        return Ok(());
+    };
+    let (x, y) = (i % img.width as usize, i / img.width as usize);
+    let range = if max.is_finite() {
+        format!("finite values in [0, {max}]")
+    } else {
+        "finite values >= 0".to_owned()
+    };
+    let msg = format!("pixel ({x}, {y}) has {channel} = {v}; expected {range}");
+    Err(image_error(path, msg))
 }
 
 /// Writes `img` as PNG (sRGB, 8-bit, clamped) or EXR (32-bit float RGB),
@@ -155,6 +184,15 @@ fn write_png(path: &Path, img: &Image, out: impl Write) -> Result<()> {
 }
 
 fn read_exr(path: &Path) -> Result<Image> {
+    let meta =
+        exr::meta::MetaData::read_from_file(path, false).map_err(|e| image_error(path, e))?;
+    for header in &meta.headers {
+        let (w, h) = (header.layer_size.width(), header.layer_size.height());
+        if w.checked_mul(h).is_none_or(|n| n > MAX_IMAGE_PIXELS) {
+            let msg = format!("declares a {w}x{h} layer, more than {MAX_IMAGE_PIXELS} pixels");
+            return Err(image_error(path, msg));
+        }
+    }
     let read = exr::prelude::read_first_rgba_layer_from_file(
         path,
         |size, _| Image::new(size.width() as u32, size.height() as u32),
@@ -294,6 +332,59 @@ mod tests {
             img.pixels,
             vec![Vec3::new(0.0, 2.0, 3.0), Vec3::new(1.0, 2.0, 3.0)]
         );
+    }
+
+    #[test]
+    fn an_exr_declaring_too_many_pixels_is_rejected_before_allocating() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let path = dir.path().join("huge.exr");
+        write_image(&path, &test_image()).expect("write exr");
+        // The data and display windows (box2i: x_min, y_min, x_max, y_max)
+        // enlarged to 60001², 43 GB of pixels; the file stays 5x3.
+        let mut bytes = std::fs::read(&path).expect("read bytes");
+        let old: Vec<u8> = [0i32, 0, 4, 2]
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        let new: Vec<u8> = [0i32, 0, 60_000, 60_000]
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        let at: Vec<usize> = (0..bytes.len() - old.len())
+            .filter(|&i| bytes[i..i + old.len()] == old[..])
+            .collect();
+        assert_eq!(at.len(), 2, "data and display windows");
+        for i in at {
+            bytes[i..i + new.len()].copy_from_slice(&new);
+        }
+        std::fs::write(&path, bytes).expect("write bytes");
+        let err = read_image(&path).expect_err("too large").to_string();
+        assert!(
+            err.contains("huge.exr") && err.contains("declares a 60001x60001 layer"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn check_values_names_the_first_pixel_outside_the_range() {
+        let path = Path::new("t.exr");
+        let mut img = test_image();
+        assert!(check_values(path, &img, 1.0).is_ok());
+        img.set(3, 1, Vec3::new(0.5, f32::NAN, 2.0));
+        img.set(4, 2, Vec3::new(-1.0, 0.0, 0.0));
+        let err = check_values(path, &img, f32::INFINITY).expect_err("nan");
+        assert_eq!(
+            err.to_string(),
+            "t.exr: pixel (3, 1) has g = NaN; expected finite values >= 0"
+        );
+        img.set(3, 1, Vec3::new(0.5, 0.5, 2.0));
+        let err = check_values(path, &img, 1.0).expect_err("above one");
+        assert_eq!(
+            err.to_string(),
+            "t.exr: pixel (3, 1) has b = 2; expected finite values in [0, 1]"
+        );
+        let err = check_values(path, &img, f32::INFINITY).expect_err("negative");
+        assert!(err.to_string().contains("pixel (4, 2) has r = -1"), "{err}");
     }
 
     #[test]

@@ -1,7 +1,7 @@
 //! glTF files as mesh sources (`mesh = "x.gltf"` in a TOML scene): node
 //! transforms flattened into the positions and normals, GLB like text glTF,
 //! mirroring nodes keeping faces and normals agreeing, errors for non-triangle
-//! primitives and for text that is not JSON.
+//! primitives and for text that is not JSON, external buffers read safely.
 
 use std::path::Path;
 
@@ -140,4 +140,38 @@ fn text_that_is_not_json_is_an_error_naming_the_file() {
         msg.contains("broken.gltf") && msg.contains("malformed glTF"),
         "{msg}"
     );
+}
+
+#[test]
+fn external_buffers_are_read_up_to_their_byte_length_from_regular_files_only() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let path = write_gltf(dir.path(), 4);
+    let text = std::fs::read_to_string(&path).expect("read back");
+    // A longer file is read only up to byteLength; a percent-encoded name
+    // is decoded.
+    let mut long = triangle_bin();
+    long.extend([7u8; 1000]);
+    std::fs::write(dir.path().join("tri long.bin"), &long).expect("write bin");
+    std::fs::write(&path, text.replace("\"tri.bin\"", "\"tri%20long.bin\"")).expect("rewrite");
+    assert_eq!(load_mesh(&path).expect("valid glTF").len(), 1);
+    let mut cases = vec![
+        (
+            "\"%FF.bin\"",
+            "buffers[0]: uri: \"%FF.bin\" does not decode to UTF-8",
+        ),
+        ("\"missing.bin\"", "buffers[0]: uri: "),
+        (
+            "\"http://example.com/tri.bin\"",
+            "buffers[0]: uri: unsupported scheme",
+        ),
+    ];
+    // A device never ends: reading it whole ran until memory ran out.
+    if cfg!(unix) {
+        cases.push(("\"file:///dev/zero\"", "/dev/zero is not a regular file"));
+    }
+    for (uri, expected) in cases {
+        std::fs::write(&path, text.replace("\"tri.bin\"", uri)).expect("rewrite");
+        let msg = load_mesh(&path).expect_err(uri).to_string();
+        assert!(msg.contains("tri.gltf") && msg.contains(expected), "{msg}");
+    }
 }

@@ -54,6 +54,18 @@ type Groups = BTreeMap<(PathKind, usize), Vec<DiffPath>>;
 
 /// Runs `epsm bench manifold`.
 pub fn run(args: &ManifoldBenchArgs) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        (1..=super::check::MAX_SAMPLES).contains(&args.samples),
+        "--samples must be in [1, {}], got {}",
+        super::check::MAX_SAMPLES,
+        args.samples
+    );
+    anyhow::ensure!(
+        args.seconds.is_finite() && args.seconds > 0.0,
+        "--seconds must be a positive number, got {}",
+        args.seconds
+    );
+    anyhow::ensure!(args.threads != Some(0), "--threads must be at least 1");
     for path in &args.scenes {
         let scene = load_scene(path)?;
         let mut table = ParamTable::new(&scene);

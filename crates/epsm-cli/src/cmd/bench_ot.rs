@@ -95,10 +95,13 @@ struct Report {
     phases: BTreeMap<&'static str, f64>,
 }
 
+/// Most points per cloud.
+const MAX_POINTS: usize = 1 << 22;
+
 /// Runs the benchmark and prints its report.
 pub fn run(args: &OtBenchArgs) -> anyhow::Result<()> {
-    if args.n == 0 {
-        bail!("--n must be at least 1");
+    if !(1..=MAX_POINTS).contains(&args.n) {
+        bail!("--n must be in [1, {MAX_POINTS}], got {}", args.n);
     }
     let (source, target) =
         synthetic::blobs_pair(args.n, args.seed).context("generating the blobs pair")?;

@@ -11,8 +11,8 @@
 //!
 //! | option | unit | default | range |
 //! |---|---|---|---|
-//! | `--triangles` | triangles in the sphere | 100000 | ≥ 20 |
-//! | `--rays` | rays per measurement | 1000000 | ≥ 1 |
+//! | `--triangles` | triangles in the sphere | 100000 | [20, 2²²] |
+//! | `--rays` | rays per measurement | 1000000 | [1, 2²⁵] |
 //! | `--threads` | rayon threads (one run) | 1 and 2 | ≥ 1 |
 //! | `--repeat` | runs per measurement, fastest reported | 3 | ≥ 1 |
 //! | `--json` | print one JSON object | off | — |
@@ -31,6 +31,11 @@ use epsm_render::{Camera, Ray};
 use glam::{DVec3, Vec2};
 use rayon::prelude::*;
 use serde::Serialize;
+
+/// Most triangles of the sphere (about 1.5 GB with its BVH).
+const MAX_TRIANGLES: usize = 1 << 22;
+/// Most rays per measurement (two sets of 32-byte rays: 2 GB).
+const MAX_RAYS: usize = 1 << 25;
 
 /// Options of `epsm bench rays`.
 #[derive(clap::Args, Debug)]
@@ -78,6 +83,18 @@ struct Report {
 
 /// Runs the benchmark.
 pub fn run(args: &RaysBenchArgs) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        (20..=MAX_TRIANGLES).contains(&args.triangles),
+        "--triangles must be in [20, {MAX_TRIANGLES}], got {}",
+        args.triangles
+    );
+    anyhow::ensure!(
+        (1..=MAX_RAYS).contains(&args.rays),
+        "--rays must be in [1, {MAX_RAYS}], got {}",
+        args.rays
+    );
+    anyhow::ensure!(args.threads != Some(0), "--threads must be at least 1");
+    anyhow::ensure!(args.repeat >= 1, "--repeat must be at least 1");
     let mesh = Arc::new(scene::bumpy_sphere(args.triangles));
     let objects = scene::scene(&mesh);
     let mut accel = Accel::build(&objects);

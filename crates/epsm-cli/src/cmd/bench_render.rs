@@ -5,7 +5,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use epsm_render::scene::load::load_scene;
+use epsm_render::scene::load::{MAX_DEPTH, load_scene};
 use epsm_render::tracer::{RenderOptions, render};
 
 use super::bench_rays::cpu_seconds;
@@ -32,6 +32,14 @@ pub struct RenderBenchArgs {
 
 /// Runs `epsm bench render`.
 pub fn run(args: &RenderBenchArgs) -> anyhow::Result<()> {
+    anyhow::ensure!(args.spp != Some(0), "--spp must be at least 1");
+    if let Some(d) = args.max_depth {
+        anyhow::ensure!(
+            (1..=MAX_DEPTH).contains(&d),
+            "--max-depth must be in [1, {MAX_DEPTH}], got {d}"
+        );
+    }
+    anyhow::ensure!(args.repeats >= 1, "--repeats must be at least 1");
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     for path in &args.scenes {
         let t0 = Instant::now();

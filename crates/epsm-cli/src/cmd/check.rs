@@ -46,8 +46,17 @@ pub struct CheckArgs {
     pub seed: u64,
 }
 
+/// Most pixel samples `epsm check` traces: each keeps its whole path record
+/// (about 0.6 kB), so 2^20 of them take about 0.7 GB.
+pub(crate) const MAX_SAMPLES: u32 = 1 << 20;
+
 /// Runs `epsm check`.
 pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        (1..=MAX_SAMPLES).contains(&args.samples),
+        "--samples must be in [1, {MAX_SAMPLES}], got {}",
+        args.samples
+    );
     let scene = load_scene(&args.scene)?;
     let mut table = ParamTable::new(&scene);
     if args.params.is_empty() {

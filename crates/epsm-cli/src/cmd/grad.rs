@@ -93,6 +93,7 @@ fn srgb(img: &Image, x: u32, y: u32) -> [f32; 3] {
 
 /// Runs `epsm grad`.
 pub fn run(args: &GradArgs) -> anyhow::Result<()> {
+    anyhow::ensure!(args.spp >= 1, "--spp must be at least 1");
     let problem = load_problem(&args.problem)?;
     let param = problem
         .params

@@ -152,7 +152,7 @@ pub fn optimize(
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let mut opt = Optimization::new(problem)?;
     if let Some(c) = resumed {
-        opt.restore(c)?;
+        opt.resume(&checkpoint, c)?;
     } else {
         save(out, "target", opt.target())?;
         save(out, "initial", &opt.render(preview_spp))?;

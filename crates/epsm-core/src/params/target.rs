@@ -1,6 +1,7 @@
 //! Parameter keys: what each `"<name>.<field>"` drives, and how a key is
 //! resolved against the scene's objects, point lights and materials.
 
+use epsm_render::scene::load::MIN_ALPHA;
 use epsm_render::scene::{MaterialId, ObjectId};
 
 use crate::error::{Error, Result};
@@ -65,6 +66,29 @@ pub enum Target {
         /// The object.
         object: ObjectId,
     },
+}
+
+impl Target {
+    /// The values a parameter of this target may take, `[lo, hi]`, and the
+    /// range in words: material values and factors keep the scene valid,
+    /// offsets and angles stay finite in the renderer's `f32`.
+    pub fn domain(&self) -> ([f64; 2], &'static str) {
+        let max = f64::from(f32::MAX);
+        let positive = f64::from(f32::MIN_POSITIVE);
+        match self {
+            Target::Albedo { .. } => ([0.0, 1.0], "an albedo in [0, 1]"),
+            Target::Alpha { .. } => ([MIN_ALPHA, 1.0], "a GGX roughness in [1e-4, 1]"),
+            Target::Ior { .. } => ([positive, max], "an IOR > 0"),
+            Target::Scale { .. } => ([positive, max], "a scale factor > 0"),
+            Target::Emission { .. } => ([0.0, max], "an emission factor >= 0"),
+            Target::Translate { .. }
+            | Target::Rotate { .. }
+            | Target::LightTranslate { .. }
+            | Target::CameraTranslate { .. }
+            | Target::CameraYaw
+            | Target::CameraPitch => ([-max, max], "a magnitude of at most 3.4e38"),
+        }
+    }
 }
 
 /// The names a key can refer to.

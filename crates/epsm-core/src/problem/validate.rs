@@ -3,6 +3,7 @@
 
 use std::path::Path;
 
+use epsm_ot::MIN_BLUR;
 use epsm_render::scene::load::{Locator, load_parts, parts_from_desc};
 use epsm_render::{Error, Scene, SceneError};
 
@@ -93,10 +94,12 @@ pub(super) fn problem(d: &ProblemDesc, file: &Path, locator: &Locator) -> OptRes
                 .err(&f("key"), format!("`{}` is listed twice", p.key))
                 .into());
         }
-        table
-            .clone()
+        let mut probe_table = table.clone();
+        let index = probe_table
             .add(&p.key)
             .map_err(|e| c.err(&f("key"), e.to_string()))?;
+        let (domain, range) = probe_table.params()[index].target.domain();
+        let within_domain = |v: f64| v >= domain[0] && v <= domain[1];
         let bounds = match p.bounds {
             Some([lo, hi]) => {
                 c.finite(&f("bounds"), lo)?;
@@ -106,18 +109,25 @@ pub(super) fn problem(d: &ProblemDesc, file: &Path, locator: &Locator) -> OptRes
                     hi > lo,
                     "an upper bound above the lower one",
                 )?;
+                for v in [lo, hi] {
+                    c.check(&f("bounds"), v, within_domain(v), range)?;
+                }
                 [lo, hi]
             }
-            None => [-f64::MAX, f64::MAX],
+            None => domain,
+        };
+        let what = match p.bounds {
+            Some(_) => "a value within `bounds`",
+            None => range,
         };
         let inside = |v: f64| v >= bounds[0] && v <= bounds[1];
         let initial = p
             .initial
-            .map(|v| c.check(&f("initial"), v, inside(v), "a value within `bounds`"))
+            .map(|v| c.check(&f("initial"), v, inside(v), what))
             .transpose()?;
         let true_value = p
             .true_value
-            .map(|v| c.check(&f("true"), v, inside(v), "a value within `bounds`"))
+            .map(|v| c.check(&f("true"), v, inside(v), what))
             .transpose()?;
         let lr =
             p.lr.map(|v| c.check(&f("lr"), v, v > 0.0, "a positive number"))
@@ -133,7 +143,12 @@ pub(super) fn problem(d: &ProblemDesc, file: &Path, locator: &Locator) -> OptRes
     }
     let target = match &d.target.image {
         Some(path) => {
-            let img = epsm_render::image_io::read_image(&base.join(path))
+            let path = base.join(path);
+            let img = epsm_render::image_io::read_image(&path)
+                .and_then(|img| {
+                    epsm_render::image_io::check_values(&path, &img, f32::INFINITY)?;
+                    Ok(img)
+                })
                 .map_err(|e| c.err("target.image", e.to_string()))?;
             let cam = &scene.camera;
             if (img.width, img.height) != (cam.width, cam.height) {
@@ -160,7 +175,7 @@ pub(super) fn problem(d: &ProblemDesc, file: &Path, locator: &Locator) -> OptRes
     let kind = match l.kind.as_str() {
         "ot_exact" => LossKind::OtExact,
         "ot_sinkhorn" => LossKind::OtSinkhorn {
-            blur: c.check("loss.blur", l.blur, l.blur > 0.0, "a positive number")?,
+            blur: c.check("loss.blur", l.blur, l.blur >= MIN_BLUR, "a number >= 1e-4")?,
         },
         "l2" => LossKind::L2,
         other => {
@@ -214,7 +229,12 @@ pub(super) fn problem(d: &ProblemDesc, file: &Path, locator: &Locator) -> OptRes
         target,
         loss: LossSettings {
             kind,
-            lambda: c.check("loss.lambda", l.lambda, l.lambda > 0.0, "a positive number")?,
+            lambda: c.check(
+                "loss.lambda",
+                l.lambda,
+                l.lambda > 0.0 && l.lambda <= f64::from(f32::MAX),
+                "a positive number of at most 3.4e38",
+            )?,
             match_resolution: [mw, mh],
             flow: l.flow,
         },

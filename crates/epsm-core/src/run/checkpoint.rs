@@ -7,6 +7,7 @@ use std::time::Instant;
 use serde::{Deserialize, Serialize};
 
 use super::{OptResult, Optimization, OptimizeError};
+use crate::drops::DropReason;
 use crate::optim::Adam;
 use crate::report::{Row, write_atomic};
 use crate::schedule::Method;
@@ -41,23 +42,101 @@ impl Optimization {
         }
     }
 
-    /// Continues from `c` (which must come from the same problem and method).
+    /// Continues from `c`, which must come from the same problem and method:
+    /// an error says which field of the checkpoint does not fit.
     pub fn restore(&mut self, c: Checkpoint) -> OptResult<()> {
-        if c.theta.len() != self.theta.len() || c.method != self.schedule.method {
-            return Err(OptimizeError::Invalid(format!(
-                "checkpoint has {} parameters and method {}; the problem has {} and {}",
-                c.theta.len(),
-                c.method.name(),
-                self.theta.len(),
-                self.schedule.method.name()
-            )));
-        }
+        self.check_checkpoint(&c).map_err(OptimizeError::Invalid)?;
         self.iteration = c.iteration;
         self.adam = c.adam;
         self.wall_before = c.wall_s;
         self.started = Instant::now();
         self.rows = c.rows;
         self.set_theta(&c.theta);
+        Ok(())
+    }
+
+    /// Continues from checkpoint `c`, read from `path` (by
+    /// [`Self::load_checkpoint`]), as [`Self::restore`] does; its errors name
+    /// the file.
+    pub fn resume(&mut self, path: &Path, c: Checkpoint) -> OptResult<()> {
+        self.restore(c).map_err(|e| match e {
+            OptimizeError::Invalid(message) => OptimizeError::File {
+                path: path.to_owned(),
+                message,
+            },
+            other => other,
+        })
+    }
+
+    /// Why `c` cannot continue this run, if it cannot.
+    fn check_checkpoint(&self, c: &Checkpoint) -> Result<(), String> {
+        let n = self.theta.len();
+        if c.theta.len() != n || c.method != self.schedule.method {
+            return Err(format!(
+                "checkpoint has {} parameters and method {}; the problem has {} and {}",
+                c.theta.len(),
+                c.method.name(),
+                n,
+                self.schedule.method.name()
+            ));
+        }
+        if c.adam.settings != self.adam.settings {
+            return Err(format!(
+                "adam.settings: {:?} differ from the problem's {:?}",
+                c.adam.settings, self.adam.settings
+            ));
+        }
+        for (key, values) in [("adam.m", &c.adam.m), ("adam.v", &c.adam.v)] {
+            if values.len() != n {
+                return Err(format!(
+                    "{key}: {} entries for {n} parameters",
+                    values.len()
+                ));
+            }
+            if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+                return Err(format!("{key}[{i}]: expected a finite number"));
+            }
+        }
+        if let Some(i) = c.adam.v.iter().position(|&v| v < 0.0) {
+            return Err(format!(
+                "adam.v[{i}]: expected a value >= 0 (a second moment)"
+            ));
+        }
+        if c.adam.t > c.adam.iteration {
+            return Err(format!(
+                "adam.t: {} steps since the last reset but {} in all",
+                c.adam.t, c.adam.iteration
+            ));
+        }
+        let bounds = &self.adam.settings.bounds;
+        if let Some((i, x)) = (c.theta.iter().zip(bounds).enumerate())
+            .find(|(_, (x, [lo, hi]))| !(*lo..=*hi).contains(*x))
+        {
+            return Err(format!(
+                "theta[{i}]: {} is outside the bounds {:?}",
+                x.0, x.1
+            ));
+        }
+        if !(c.wall_s.is_finite() && c.wall_s >= 0.0) {
+            return Err(format!("wall_s: expected seconds >= 0, found {}", c.wall_s));
+        }
+        if c.rows.len() != c.iteration as usize {
+            return Err(format!(
+                "rows: {} rows for {} iterations",
+                c.rows.len(),
+                c.iteration
+            ));
+        }
+        let drops = DropReason::ALL.len();
+        for (i, row) in c.rows.iter().enumerate() {
+            if row.theta.len() != n || row.dropped.len() != drops {
+                return Err(format!(
+                    "rows[{i}]: expected {n} theta values and {drops} dropped counts, found {} and {}",
+                    row.theta.len(),
+                    row.dropped.len()
+                ));
+            }
+        }
         Ok(())
     }
 

@@ -69,17 +69,20 @@ fn bad_input_is_a_typed_error() {
             })
         );
     }
-    let bad = Matcher::Sinkhorn(SinkhornSettings {
-        blur: -1.0,
-        ..SinkhornSettings::default()
-    });
-    assert!(matches!(
-        bad.solve(&a, &a),
-        Err(OtError::InvalidSetting {
-            key: "sinkhorn.blur",
-            ..
-        })
-    ));
+    // 1e-300: ε = blur² underflows to 0 and the ε schedule never ended.
+    for blur in [-1.0, 1e-300] {
+        let bad = Matcher::Sinkhorn(SinkhornSettings {
+            blur,
+            ..SinkhornSettings::default()
+        });
+        assert!(matches!(
+            bad.solve(&a, &a),
+            Err(OtError::InvalidSetting {
+                key: "sinkhorn.blur",
+                ..
+            })
+        ));
+    }
 }
 
 #[test]

@@ -33,6 +33,8 @@ use std::path::Path;
 
 use serde::de::DeserializeOwned;
 
+pub use build::MAX_DEPTH;
+pub use check::MIN_ALPHA;
 pub use locate::Locator;
 
 use crate::error::{Error, Result, SceneError};

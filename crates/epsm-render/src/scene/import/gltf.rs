@@ -18,7 +18,8 @@
 //! ```
 
 use std::collections::HashSet;
-use std::path::Path;
+use std::io::Read;
+use std::path::{Path, PathBuf};
 
 use glam::{DAffine3, DMat4, Vec2, Vec3};
 use gltf::accessor::{DataType, Dimensions};
@@ -99,9 +100,67 @@ pub(crate) fn open(bytes: &[u8], file: &Path) -> Result<File> {
         }
     }
     let doc = gltf::Document::from_json(json).map_err(malformed)?;
-    let buffers = gltf::import_buffers(&doc, file.parent(), gltf.blob)
-        .map_err(|e| fail("buffers", format!("cannot load glTF buffers: {e}")))?;
+    let base = file.parent().unwrap_or(Path::new(""));
+    let mut blob = gltf.blob;
+    let buffers = doc
+        .buffers()
+        .map(|b| {
+            buffer(&b, base, &mut blob).map_err(|msg| fail(&format!("buffers[{}]", b.index()), msg))
+        })
+        .collect::<Result<_>>()?;
     Ok(File { doc, buffers })
+}
+
+/// The bytes of buffer `b`: the GLB binary chunk, a `data:` URI, or the first
+/// `byteLength` bytes of a regular file (a `file:` URI or a percent-encoded
+/// path relative to `base`). The error says what is wrong with it.
+fn buffer(
+    b: &gltf::Buffer,
+    base: &Path,
+    blob: &mut Option<Vec<u8>>,
+) -> Result<gltf::buffer::Data, String> {
+    let data = match b.source() {
+        gltf::buffer::Source::Bin => blob.take().ok_or("refers to a missing GLB binary chunk")?,
+        gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
+            gltf::buffer::Data::from_source(b.source(), None)
+                .map_err(|e| format!("uri: malformed data URI: {e}"))?
+                .0
+        }
+        gltf::buffer::Source::Uri(uri) => {
+            let path = match uri
+                .strip_prefix("file://")
+                .or_else(|| uri.strip_prefix("file:"))
+            {
+                Some(path) => PathBuf::from(path),
+                None if uri.contains(':') => {
+                    return Err(format!("uri: unsupported scheme in \"{uri}\""));
+                }
+                None => base.join(
+                    urlencoding::decode(uri)
+                        .map_err(|e| format!("uri: \"{uri}\" does not decode to UTF-8: {e}"))?
+                        .as_ref(),
+                ),
+            };
+            let io = |e: std::io::Error| format!("uri: {}: {e}", path.display());
+            let file = std::fs::File::open(&path).map_err(io)?;
+            if !file.metadata().map_err(io)?.is_file() {
+                return Err(format!("uri: {} is not a regular file", path.display()));
+            }
+            let mut data = Vec::new();
+            file.take(b.length() as u64)
+                .read_to_end(&mut data)
+                .map_err(io)?;
+            data
+        }
+    };
+    if data.len() < b.length() {
+        return Err(format!(
+            "byteLength is {} but the buffer holds {} bytes",
+            b.length(),
+            data.len()
+        ));
+    }
+    Ok(gltf::buffer::Data(data))
 }
 
 /// A node of the scene with its world transform (object → world).

@@ -13,7 +13,7 @@ use super::object::Objects;
 use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::film::Image;
-use crate::image_io::{is_supported, read_image};
+use crate::image_io::{check_values, is_supported, read_image};
 use crate::lights::{Background, EnvMap, PointLight};
 use crate::materials::{Bsdf, Conductor, Dielectric, Diffuse, Material, RoughConductor, Texture};
 use crate::scene::desc::{
@@ -127,10 +127,12 @@ fn render(r: &RenderDesc, ctx: &Ctx) -> Result<RenderSettings> {
     })
 }
 
-/// Loads the image at `relative` (from field `field`) through the cache.
+/// Loads the image at `relative` (from field `field`) through the cache and
+/// checks that every channel of every pixel is finite and in `[0, max]`.
 pub(crate) fn image(
     field: &str,
     relative: &str,
+    max: f32,
     ctx: &Ctx,
     images: &mut ImageCache,
 ) -> Result<Arc<Image>> {
@@ -142,11 +144,15 @@ pub(crate) fn image(
     let canonical = path
         .canonicalize()
         .map_err(|e| ctx.err(field, format!("cannot open {}: {e}", path.display())))?;
-    if let Some(img) = images.get(&canonical) {
-        return Ok(img.clone());
-    }
-    let img = Arc::new(read_image(&canonical).map_err(|e| ctx.nested(field, &e))?);
-    images.insert(canonical, img.clone());
+    let img = match images.get(&canonical) {
+        Some(img) => img.clone(),
+        None => {
+            let img = Arc::new(read_image(&canonical).map_err(|e| ctx.nested(field, &e))?);
+            images.insert(canonical.clone(), img.clone());
+            img
+        }
+    };
+    check_values(&canonical, &img, max).map_err(|e| ctx.nested(field, &e))?;
     Ok(img)
 }
 
@@ -167,7 +173,7 @@ fn background(b: &BackgroundDesc, ctx: &Ctx, images: &mut ImageCache) -> Result<
             )?))
         }
         (None, Some(file)) => {
-            let image = image("background.envmap", file, ctx, images)?;
+            let image = image("background.envmap", file, f32::INFINITY, ctx, images)?;
             let scale = b.scale.unwrap_or(1.0);
             let scale = ctx.within("background.scale", scale, 0.0, f64::MAX, "a value >= 0")?;
             let rotate = ctx.finite("background.rotate", b.rotate.unwrap_or(0.0))?;
@@ -216,7 +222,9 @@ fn material(name: &str, m: &MaterialDesc, ctx: &Ctx, images: &mut ImageCache) ->
                 (Some(_), Some(_)) => {
                     return Err(ctx.err(&field, "give either albedo or texture, not both"));
                 }
-                (_, Some(t)) => Texture::Image(image(&format!("{field}.texture"), t, ctx, images)?),
+                (_, Some(t)) => {
+                    Texture::Image(image(&format!("{field}.texture"), t, 1.0, ctx, images)?)
+                }
                 (a, None) => Texture::Constant(unit("albedo", *a, 0.5)?),
             };
             Bsdf::Diffuse(Diffuse { albedo })

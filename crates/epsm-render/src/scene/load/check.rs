@@ -55,12 +55,18 @@ impl Ctx<'_> {
         self.base.join(relative)
     }
 
-    /// A finite number.
+    /// A finite number that stays finite in the renderer's `f32`.
     pub fn finite(&self, field: &str, v: f64) -> Result<f64, Error> {
-        if v.is_finite() {
-            Ok(v)
-        } else {
+        if !v.is_finite() {
             Err(self.err(field, format!("expected a finite number, found {v}")))
+        } else if v.abs() > f64::from(f32::MAX) {
+            let msg = format!(
+                "expected a magnitude of at most {:e} (single precision), found {v:e}",
+                f32::MAX
+            );
+            Err(self.err(field, msg))
+        } else {
+            Ok(v)
         }
     }
 

@@ -90,7 +90,7 @@ pub(crate) fn emitter(
                 })?,
                 None => 0.0,
             };
-            let img = image(&field("filename"), file, ctx, images)?;
+            let img = image(&field("filename"), file, f32::INFINITY, ctx, images)?;
             let map = EnvMap::new((*img).clone(), scale as f32, rotate_y as f32);
             Emitter::Background(Background::EnvMap(Arc::new(map)))
         }

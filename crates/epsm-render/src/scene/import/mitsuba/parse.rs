@@ -232,9 +232,10 @@ impl Element {
     }
 }
 
-/// Rejects the children of `el` that nobody read: a warning for names in
-/// `skippable` (documented as safe to skip), an error naming the element
-/// and line for anything else.
+/// Rejects the children of `el` that nobody read: an error for a second
+/// property of a name already read (Mitsuba rejects it too), a warning for
+/// names in `skippable` (documented as safe to skip), an error naming the
+/// element and line for anything else.
 pub(crate) fn finish(
     el: &Element,
     ctx: &Ctx,
@@ -244,6 +245,10 @@ pub(crate) fn finish(
     for c in el.children.iter().filter(|c| !c.used.get()) {
         let name = c.attr("name").unwrap_or(&c.tag);
         let what = format!("<{} name=\"{name}\">", c.tag);
+        let read_before = |o: &Element| o.used.get() && o.attr("name") == c.attr("name");
+        if c.attr("name").is_some() && el.children.iter().any(read_before) {
+            return Err(ctx.err(&c.path, format!("{what} is given more than once")));
+        }
         if skippable.contains(&name) {
             warnings.push(ctx.located(
                 &c.path,
