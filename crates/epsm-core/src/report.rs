@@ -106,8 +106,8 @@ pub fn csv(keys: &[String], rows: &[Row]) -> String {
     out
 }
 
-/// Writes `bytes` to `path` atomically (a temporary file beside it, then a
-/// rename), creating the parent folder.
+/// Writes `bytes` to `path` atomically
+/// ([`epsm_render::atomic_file::write_atomic`]), creating the parent folder.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> OptResult<()> {
     let err = |e: std::io::Error| OptimizeError::File {
         path: path.to_owned(),
@@ -116,10 +116,9 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> OptResult<()> {
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(err)?;
     }
-    let mut tmp = path.as_os_str().to_owned();
-    tmp.push(".tmp");
-    std::fs::write(&tmp, bytes).map_err(err)?;
-    std::fs::rename(&tmp, path).map_err(err)
+    epsm_render::atomic_file::write_atomic(path, err, |out| {
+        std::io::Write::write_all(out, bytes).map_err(err)
+    })
 }
 
 /// RMS of `theta − truth` over the parameters with a true value (`None`

@@ -13,12 +13,13 @@
 //! never sees a half-written file and a failed write leaves nothing behind.
 //! sRGB transfer functions follow IEC 61966-2-1.
 
-use std::io::{BufWriter, Write};
+use std::io::Write;
 use std::path::Path;
 
 use glam::Vec3;
 use image::ImageEncoder;
 
+use crate::atomic_file::write_atomic;
 use crate::error::{Error, Result};
 use crate::film::Image;
 
@@ -101,26 +102,10 @@ pub fn write_image(path: &Path, img: &Image) -> Result<()> {
             "image has no pixels or a wrong pixel count",
         ));
     }
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    let io = |source| Error::Io {
-        path: path.to_owned(),
-        source,
-    };
-    let mut tmp = tempfile::Builder::new()
-        .prefix(".epsm-")
-        .suffix(".tmp")
-        .tempfile_in(dir)
-        .map_err(io)?;
-    match format {
-        Format::Png => write_png(path, img, BufWriter::new(tmp.as_file_mut()))?,
-        Format::Exr => write_exr(path, img, BufWriter::new(tmp.as_file_mut()))?,
-    }
-    tmp.as_file().sync_all().map_err(io)?;
-    tmp.persist(path).map_err(|e| io(e.error))?;
-    Ok(())
+    write_atomic(path, io_error(path), |out| match format {
+        Format::Png => write_png(path, img, out),
+        Format::Exr => write_exr(path, img, out),
+    })
 }
 
 /// sRGB-encoded value in [0, 1] → linear.
@@ -166,6 +151,31 @@ fn read_png(path: &Path) -> Result<Image> {
     })
 }
 
+/// Writes 8-bit pixels as a PNG at `path`, atomically (the folder must
+/// exist): `width × height` pixels of layout `color` (for example `Rgb8` or
+/// `Rgba8`, rows top first) in `bytes`, which must hold exactly that many.
+/// For images made for viewing (plots, screenshots); renders go through
+/// [`write_image`].
+pub fn write_png_bytes(
+    path: &Path,
+    width: u32,
+    height: u32,
+    color: image::ExtendedColorType,
+    bytes: &[u8],
+) -> Result<()> {
+    let expected = u64::from(width) * u64::from(height) * u64::from(color.bits_per_pixel() / 8);
+    if bytes.len() as u64 != expected || expected == 0 {
+        let msg = format!(
+            "{width}x{height} pixels of {color:?} need {expected} bytes, got {}",
+            bytes.len()
+        );
+        return Err(image_error(path, msg));
+    }
+    write_atomic(path, io_error(path), |out| {
+        encode_png(path, width, height, color, bytes, out)
+    })
+}
+
 fn write_png(path: &Path, img: &Image, out: impl Write) -> Result<()> {
     let bytes: Vec<u8> = img
         .pixels
@@ -173,14 +183,36 @@ fn write_png(path: &Path, img: &Image, out: impl Write) -> Result<()> {
         .flat_map(|p| p.to_array())
         .map(|v| (linear_to_srgb(v) * 255.0).round() as u8)
         .collect();
+    encode_png(
+        path,
+        img.width,
+        img.height,
+        image::ExtendedColorType::Rgb8,
+        &bytes,
+        out,
+    )
+}
+
+/// PNG-encodes `bytes` (their length checked by the caller) into `out`.
+fn encode_png(
+    path: &Path,
+    width: u32,
+    height: u32,
+    color: image::ExtendedColorType,
+    bytes: &[u8],
+    out: impl Write,
+) -> Result<()> {
     image::codecs::png::PngEncoder::new(out)
-        .write_image(
-            &bytes,
-            img.width,
-            img.height,
-            image::ExtendedColorType::Rgb8,
-        )
+        .write_image(bytes, width, height, color)
         .map_err(|e| image_error(path, e))
+}
+
+/// The I/O error of a write to `path`.
+fn io_error(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
+    |source| Error::Io {
+        path: path.to_owned(),
+        source,
+    }
 }
 
 fn read_exr(path: &Path) -> Result<Image> {
@@ -399,6 +431,25 @@ mod tests {
             .collect();
         assert_eq!(names, vec![std::ffi::OsString::from("d.exr")]);
         assert_eq!(read_image(&path).expect("read"), test_image());
+    }
+
+    #[test]
+    fn png_bytes_are_written_as_given_and_a_wrong_length_is_an_error() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let path = dir.path().join("plot.png");
+        let rgb = [0u8, 128, 255, 255, 255, 255];
+        let color = image::ExtendedColorType::Rgb8;
+        write_png_bytes(&path, 2, 1, color, &rgb).expect("write");
+        let back = read_image(&path).expect("read");
+        let expect = |v: u8| srgb_to_linear(f32::from(v) / 255.0);
+        assert_eq!(
+            back.get(0, 0),
+            Vec3::new(expect(0), expect(128), expect(255))
+        );
+        assert_eq!(back.get(1, 0), Vec3::ONE);
+        let err = write_png_bytes(&path, 2, 2, color, &rgb).expect_err("short buffer");
+        assert!(err.to_string().contains("need 12 bytes, got 6"), "{err}");
+        assert_eq!(std::fs::read_dir(dir.path()).expect("list").count(), 1);
     }
 
     #[test]

@@ -29,6 +29,7 @@
 //!   are barycentric: `p = (1 − b1 − b2)·p0 + b1·p1 + b2·p2`. Geometric normal
 //!   `normalize((p1 − p0) × (p2 − p0))` (counter-clockwise front face).
 
+pub mod atomic_file;
 pub mod bvh;
 pub mod camera;
 pub mod error;

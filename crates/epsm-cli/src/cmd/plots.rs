@@ -121,20 +121,13 @@ fn tick(v: f64) -> String {
     }
 }
 
-/// Writes an 8-bit RGB buffer as PNG atomically (temporary file, then rename).
+/// Writes an 8-bit RGB buffer as PNG atomically, creating the folder.
 pub fn write_png(path: &Path, w: u32, h: u32, rgb: &[u8]) -> anyhow::Result<()> {
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
-    let tmp = path.with_extension("png.tmp");
-    image::save_buffer_with_format(
-        &tmp,
-        rgb,
-        w,
-        h,
-        image::ColorType::Rgb8,
-        image::ImageFormat::Png,
-    )
-    .with_context(|| format!("writing {}", tmp.display()))?;
-    std::fs::rename(&tmp, path).with_context(|| format!("writing {}", path.display()))
+    let rgb8 = image::ExtendedColorType::Rgb8;
+    Ok(epsm_render::image_io::write_png_bytes(
+        path, w, h, rgb8, rgb,
+    )?)
 }
