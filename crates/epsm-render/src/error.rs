@@ -40,6 +40,17 @@ impl SceneError {
     }
 }
 
+/// A number as file errors print it ("found …"): as written for magnitudes
+/// in `[1e-4, 1e16)` and zero, in scientific notation otherwise, so that
+/// `1e300` does not print as 301 digits nor `1e-300` as a row of zeros.
+pub fn shown(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() || (1e-4..1e16).contains(&v.abs()) {
+        v.to_string()
+    } else {
+        format!("{v:e}")
+    }
+}
+
 /// Errors of this crate.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
@@ -70,3 +81,27 @@ pub enum Error {
 
 /// Result with this crate's [`Error`].
 pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+#[cfg(test)]
+mod tests {
+    use super::shown;
+
+    #[test]
+    fn numbers_print_as_written_unless_very_large_or_small() {
+        for (v, text) in [
+            (0.0, "0"),
+            (-1.5, "-1.5"),
+            (5.0, "5"),
+            (1e-4, "0.0001"),
+            (1e15, "1000000000000000"),
+            (1e16, "1e16"),
+            (1e300, "1e300"),
+            (-1e-300, "-1e-300"),
+            (3e-5, "3e-5"),
+            (f64::NAN, "NaN"),
+            (f64::NEG_INFINITY, "-inf"),
+        ] {
+            assert_eq!(shown(v), text);
+        }
+    }
+}

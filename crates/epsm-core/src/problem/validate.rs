@@ -4,6 +4,7 @@
 use std::path::Path;
 
 use epsm_ot::MIN_BLUR;
+use epsm_render::error::shown;
 use epsm_render::scene::load::{Locator, load_parts, parts_from_desc};
 use epsm_render::{Error, Scene, SceneError};
 
@@ -30,7 +31,10 @@ impl Ctx<'_> {
         if v.is_finite() {
             Ok(v)
         } else {
-            Err(self.err(field, format!("expected a finite number, found {v}")))
+            Err(self.err(
+                field,
+                format!("expected a finite number, found {}", shown(v)),
+            ))
         }
     }
 
@@ -40,7 +44,7 @@ impl Ctx<'_> {
         if ok {
             Ok(v)
         } else {
-            Err(self.err(field, format!("expected {what}, found {v}")))
+            Err(self.err(field, format!("expected {what}, found {}", shown(v))))
         }
     }
 

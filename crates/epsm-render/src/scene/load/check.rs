@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use glam::{DVec3, Vec3};
 
 use super::locate::Locator;
-use crate::error::{Error, SceneError};
+use crate::error::{Error, SceneError, shown};
 
 /// Smallest accepted GGX roughness `alpha` (smoother surfaces are conductors).
 pub const MIN_ALPHA: f64 = 1e-4;
@@ -58,11 +58,15 @@ impl Ctx<'_> {
     /// A finite number that stays finite in the renderer's `f32`.
     pub fn finite(&self, field: &str, v: f64) -> Result<f64, Error> {
         if !v.is_finite() {
-            Err(self.err(field, format!("expected a finite number, found {v}")))
+            Err(self.err(
+                field,
+                format!("expected a finite number, found {}", shown(v)),
+            ))
         } else if v.abs() > f64::from(f32::MAX) {
             let msg = format!(
-                "expected a magnitude of at most {:e} (single precision), found {v:e}",
-                f32::MAX
+                "expected a magnitude of at most {:e} (single precision), found {}",
+                f32::MAX,
+                shown(v)
             );
             Err(self.err(field, msg))
         } else {
@@ -76,7 +80,7 @@ impl Ctx<'_> {
         if (lo..=hi).contains(&v) {
             Ok(v)
         } else {
-            Err(self.err(field, format!("expected {what}, found {v}")))
+            Err(self.err(field, format!("expected {what}, found {}", shown(v))))
         }
     }
 
@@ -111,7 +115,7 @@ impl Ctx<'_> {
     pub fn ior(&self, field: &str, v: f64) -> Result<f32, Error> {
         let v = self.finite(field, v)?;
         if v <= 0.0 {
-            return Err(self.err(field, format!("expected a value > 0, found {v}")));
+            return Err(self.err(field, format!("expected a value > 0, found {}", shown(v))));
         }
         Ok(v as f32)
     }
