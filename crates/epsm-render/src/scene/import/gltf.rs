@@ -24,7 +24,7 @@ use std::path::{Path, PathBuf};
 use glam::{DAffine3, DMat4, Vec2, Vec3};
 use gltf::accessor::{DataType, Dimensions};
 
-use crate::error::{Error, Result, SceneError};
+use crate::error::{Error, Result, SceneError, shown};
 use crate::scene::Mesh;
 
 /// Reads the glTF or GLB file at `path` into one mesh (not yet validated).
@@ -171,9 +171,14 @@ pub(crate) struct Placed<'a> {
     pub world: DMat4,
 }
 
+/// How far a node rotation's quaternion length may be from 1 (quaternions
+/// written with a few digits still load).
+const ROTATION_TOLERANCE: f64 = 1e-3;
+
 /// The nodes of the default scene (or the first scene), depth-first in file
 /// order. Errors for a missing scene, a node reached twice (a cycle or a
-/// shared child: glTF nodes form a forest) and a non-finite or singular
+/// shared child: glTF nodes form a forest), a rotation that is not a unit
+/// quaternion (within [`ROTATION_TOLERANCE`]) and a non-finite or singular
 /// transform.
 pub(crate) fn walk<'a>(doc: &'a gltf::Document, file: &Path) -> Result<Vec<Placed<'a>>> {
     let fail = |field: String, msg: &str| Error::from(SceneError::new(file, field, msg));
@@ -190,6 +195,15 @@ pub(crate) fn walk<'a>(doc: &'a gltf::Document, file: &Path) -> Result<Vec<Place
         if !seen.insert(node.index()) {
             let msg = "reached twice: node cycles and shared children are not allowed";
             return Err(fail(field, msg));
+        }
+        // glTF rotations are unit quaternions (glTF 2.0 §5.25); gltf's matrix
+        // of any other would be a silent identity or a scaled rotation.
+        if let gltf::scene::Transform::Decomposed { rotation, .. } = node.transform() {
+            let norm = rotation.map(f64::from).iter().map(|q| q * q).sum::<f64>().sqrt();
+            if norm.is_nan() || (norm - 1.0).abs() > ROTATION_TOLERANCE {
+                let msg = format!("expected a unit quaternion, found one of length {}", shown(norm));
+                return Err(fail(format!("{field}.rotation"), &msg));
+            }
         }
         let local = DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)));
         let world = parent * local;
