@@ -131,26 +131,32 @@ fn compare_under_a_time_budget_stops_every_method_at_the_budget() {
 }
 
 #[test]
-fn compare_rejects_an_unknown_method_before_running_any() {
+fn compare_rejects_a_bad_method_list_before_running_any() {
     let dir = std::env::temp_dir().join(format!("epsm-compare-bad-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
     let problem = tiny();
-    let run = epsm(&[
-        "compare",
-        problem.to_str().expect("utf-8"),
-        "--methods",
-        "epsm,foo",
-        "--out",
-        dir.to_str().expect("utf-8 path"),
-        "--iterations",
-        "1",
-    ]);
-    assert_eq!(run.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&run.stderr).contains("--method `foo`"));
-    assert!(
-        !dir.join("epsm").exists(),
-        "epsm ran before the bad method was noticed"
-    );
+    for (methods, expected) in [
+        ("epsm,foo", "--method `foo`"),
+        ("epsm,l2,epsm", "`epsm` is listed twice (entries 1 and 3)"),
+    ] {
+        let _ = std::fs::remove_dir_all(&dir);
+        let run = epsm(&[
+            "compare",
+            problem.to_str().expect("utf-8"),
+            "--methods",
+            methods,
+            "--out",
+            dir.to_str().expect("utf-8 path"),
+            "--iterations",
+            "1",
+        ]);
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert_eq!(run.status.code(), Some(1), "{methods}: {stderr}");
+        assert!(stderr.contains(expected), "{methods}: {stderr}");
+        assert!(
+            !dir.join("epsm").exists(),
+            "{methods}: epsm ran before the bad list was noticed"
+        );
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -56,7 +56,16 @@ pub fn run(args: &CompareArgs) -> anyhow::Result<()> {
         .unwrap_or("problem")
         .to_owned();
     // Every method's problem first, so that a bad `--methods` entry fails
-    // before any run.
+    // before any run. A method listed twice would run twice into one folder.
+    for (i, m) in args.methods.iter().enumerate() {
+        if let Some(j) = args.methods[..i].iter().position(|x| x == m) {
+            anyhow::bail!(
+                "--methods: `{m}` is listed twice (entries {} and {})",
+                j + 1,
+                i + 1
+            );
+        }
+    }
     let problems = args
         .methods
         .iter()
