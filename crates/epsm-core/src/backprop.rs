@@ -186,9 +186,11 @@ pub fn backprop(input: &PassInput<'_>, records: &[PathRecord]) -> (Vec<f64>, Pas
                     out.entries.push((k, f64::from(g_rgb.dot(dc) * scale)));
                 }
             }
+            if let Some(c) = c {
+                out.stats.dropped.merge(&c.skipped);
+            }
             match (c, mass.get(px)) {
                 (Some(c), Some(&m)) if m > 0.0 && !c.paths.is_empty() => {
-                    out.stats.dropped.merge(&c.skipped);
                     let g = input.loss.g_xy[px] / m;
                     for path in &c.paths {
                         solve_one(path, g, &motion, &settings, &mut out);
