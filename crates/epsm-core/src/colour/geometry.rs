@@ -141,7 +141,8 @@ impl Geometric<'_> {
         }
     }
 
-    /// The derivative along parameter `k`.
+    /// The derivative along parameter `k`, added to `out` unless it is
+    /// dropped (counted in `skipped`).
     fn one(
         &self,
         record: &PathRecord,
@@ -151,6 +152,24 @@ impl Geometric<'_> {
         out: &mut Vec<(usize, Vec3)>,
         skipped: &mut DropCounts,
     ) {
+        match self.derivative(record, nodes, lights, k, skipped) {
+            Ok(sum) if !sum.is_finite() => skipped.add(DropReason::NonFinite),
+            Ok(sum) if sum != Vec3::ZERO => out.push((k, sum)),
+            Ok(_) => {}
+            Err(reason) => skipped.add(reason),
+        }
+    }
+
+    /// `∂c/∂θ_k` of the record; terms past a delta vertex that cannot be
+    /// differentiated are left out and counted in `skipped`.
+    fn derivative(
+        &self,
+        record: &PathRecord,
+        nodes: &[Placed],
+        lights: &[Option<Placed>],
+        k: usize,
+        skipped: &mut DropCounts,
+    ) -> Result<Vec3, DropReason> {
         let v = &record.vertices;
         let m: Vec<Moving> = nodes.iter().map(|p| p.d(k)).collect();
         let material = |i: usize| {
@@ -174,10 +193,7 @@ impl Geometric<'_> {
             };
             // Emission hit here.
             let own = v[i].contribution - conns().map(|(c, _)| c.contribution).sum::<Vec3>();
-            let Some(mat) = material(i) else {
-                skipped.add(DropReason::DegenerateTriangle);
-                return;
-            };
+            let mat = material(i).ok_or(DropReason::DegenerateTriangle)?;
             let delta = delta_lobe(&v[i]);
             let on_rays = self.primary == PrimaryMotion::OnCameraRay;
             if delta.is_some()
@@ -224,7 +240,7 @@ impl Geometric<'_> {
             match (m.get(j + 1), delta) {
                 (_, Some(lobe)) => {
                     let (c, dc) = cos(&m[j], &wi);
-                    let rate = chain::weight_rate(mat, lobe, v[i].eta, c, dc);
+                    let rate = chain::weight_rate(mat, lobe, v[i].eta, c, dc)?;
                     prefix += Vec3::splat(rate as f32);
                 }
                 (Some(next), None) => {
@@ -239,12 +255,6 @@ impl Geometric<'_> {
         if valid {
             sum += record.escaped * prefix;
         }
-        if sum.is_finite() {
-            if sum != Vec3::ZERO {
-                out.push((k, sum));
-            }
-        } else {
-            skipped.add(DropReason::NonFinite);
-        }
+        Ok(sum)
     }
 }
