@@ -41,7 +41,7 @@ use geometry::Geometric;
 pub use geometry::PrimaryMotion;
 use material::Probe;
 
-use crate::drops::DropCounts;
+use crate::drops::{DropCounts, DropReason};
 use crate::motion::Motion;
 use crate::params::{ParamTable, Target};
 
@@ -106,7 +106,10 @@ impl ColourModel {
     /// `dc/dθ` of one path sample as `(parameter, ∂c/∂θ per channel)`
     /// entries (a parameter may appear more than once; entries add up).
     /// `motion` is the placement at θ; terms left out are counted in
-    /// `skipped`.
+    /// `skipped`. Material and emission terms of a record with a non-finite
+    /// value (e.g. a sample the tracer zeroed as non-finite, whose vertex
+    /// contributions stay recorded) are dropped together and counted as
+    /// [`DropReason::NonFinite`].
     pub fn gradient(
         &self,
         record: &PathRecord,
@@ -119,6 +122,10 @@ impl ColourModel {
             return out;
         }
         self.values(record, scene, &mut out);
+        if out.iter().any(|(_, d)| !d.is_finite()) {
+            out.clear();
+            skipped.add(DropReason::NonFinite);
+        }
         if let Some(primary) = self.primary {
             let geo = Geometric {
                 scene,
