@@ -230,3 +230,43 @@ fn a_record_whose_only_path_is_dropped_still_counts_the_drop_in_the_pass() {
     let (_, stats) = backprop(&input, std::slice::from_ref(&s.record));
     assert_eq!(stats.dropped.get(DropReason::NotDifferentiable), 1);
 }
+
+#[test]
+fn a_non_finite_shadow_is_dropped_without_silencing_its_pixel() {
+    let mut rng = Rng::new(3);
+    let mut s = loop {
+        if let Some(s) = build(
+            &Spec::new(PathKind::Shadow, Vec::new(), End::PointNee),
+            &mut rng,
+        ) {
+            break s;
+        }
+    };
+    s.table.add("o0.translate.x").expect("valid key");
+    for c in &mut s.record.connections {
+        c.unoccluded = Vec3::NAN;
+    }
+    let (w, h) = (s.scene.camera().width, s.scene.camera().height);
+    let n = (w * h) as usize;
+    let loss = LossEval {
+        value: 1.0,
+        width: w,
+        height: h,
+        g_rgb: vec![Vec3::ZERO; n],
+        g_xy: vec![DVec2::ONE; n],
+        matched: None,
+    };
+    let colour = ColourModel::default();
+    let input = PassInput {
+        scene: &s.scene,
+        table: &s.table,
+        colour: &colour,
+        loss: &loss,
+        spp: 1,
+        use_: PathUse::All,
+    };
+    let (grad, stats) = backprop(&input, std::slice::from_ref(&s.record));
+    assert_eq!(stats.dropped.get(DropReason::NonFinite), 1);
+    assert_eq!(stats.solved, 1, "the primary path is still solved");
+    assert!(grad.iter().all(|g| g.is_finite()));
+}
