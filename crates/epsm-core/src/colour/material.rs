@@ -93,7 +93,21 @@ impl Probe {
 /// `∂ ln f` per channel from `f(θ + h) = p`, `f(θ − h) = m` over `width`
 /// (0 where `f = 0`).
 fn log_rate(p: Vec3, m: Vec3, width: f32) -> Vec3 {
-    let tiny = Vec3::splat(1e-20);
     let f = 0.5 * (p + m);
-    Vec3::select(f.cmpgt(tiny), (p - m) / width / f.max(tiny), Vec3::ZERO)
+    Vec3::select(f.cmpgt(Vec3::ZERO), (p - m) / width / f, Vec3::ZERO)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn log_rate_of_a_small_positive_value_is_not_zeroed() {
+        let r = log_rate(Vec3::splat(2e-21), Vec3::splat(1e-21), 1.0);
+        assert!(
+            (r - Vec3::splat(2.0 / 3.0)).abs().max_element() < 1e-6,
+            "{r}"
+        );
+        assert_eq!(log_rate(Vec3::ZERO, Vec3::ZERO, 1.0), Vec3::ZERO);
+    }
 }
