@@ -15,6 +15,7 @@ use epsm_render::materials::fresnel::fresnel_dielectric;
 use epsm_render::materials::{Bsdf, Lobe, Material, Texture};
 use glam::{Vec2, Vec3};
 
+use crate::drops::DropReason;
 use crate::params::Target;
 
 /// One material parameter with the material moved to `θ ± h`.
@@ -72,8 +73,11 @@ impl Probe {
         )
     }
 
-    /// `∂ ln w/∂θ` of a delta lobe's weight `w` for local `wi`.
-    pub(super) fn delta_ratio(&self, wi: Vec3, lobe: Lobe) -> Vec3 {
+    /// `∂ ln w/∂θ` of a delta lobe's weight `w` for local `wi`. Fails with
+    /// [`DropReason::TotalInternalReflection`] when the weight vanishes on
+    /// one side of the difference only (a refraction at the critical angle
+    /// of `ior ± h`).
+    pub(super) fn delta_ratio(&self, wi: Vec3, lobe: Lobe) -> Result<Vec3, DropReason> {
         let w = |m: &Material| match &m.bsdf {
             Bsdf::Dielectric(d) => {
                 let eta = if wi.z >= 0.0 { d.ior } else { 1.0 / d.ior };
@@ -86,7 +90,11 @@ impl Probe {
             }
             _ => Vec3::ZERO,
         };
-        log_rate(w(&self.plus), w(&self.minus), self.width)
+        let (p, m) = (w(&self.plus), w(&self.minus));
+        if p.cmpgt(Vec3::ZERO) != m.cmpgt(Vec3::ZERO) {
+            return Err(DropReason::TotalInternalReflection);
+        }
+        Ok(log_rate(p, m, self.width))
     }
 }
 
@@ -109,5 +117,26 @@ mod tests {
             "{r}"
         );
         assert_eq!(log_rate(Vec3::ZERO, Vec3::ZERO, 1.0), Vec3::ZERO);
+    }
+
+    #[test]
+    fn an_ior_difference_reaching_total_internal_reflection_is_dropped() {
+        use epsm_render::materials::dielectric::Dielectric;
+        let glass = Material {
+            name: "glass".into(),
+            bsdf: Bsdf::Dielectric(Dielectric { ior: 1.5 }),
+            two_sided: true,
+        };
+        let probe = Probe::new(0, &glass, Target::Ior { material: 0 }, 1.5);
+        let lobe = Lobe::SpecularTransmission;
+        // From inside, just past the critical cosine of ior 1.5 (0.745356)
+        // but not of ior 1.5 + h (0.745415).
+        let wi = |z: f32| Vec3::new((1.0 - z * z).sqrt(), 0.0, -z);
+        assert_eq!(
+            probe.delta_ratio(wi(0.74538), lobe),
+            Err(DropReason::TotalInternalReflection)
+        );
+        let away = probe.delta_ratio(wi(0.9), lobe).expect("far from critical");
+        assert!(away.is_finite() && away != Vec3::ZERO);
     }
 }

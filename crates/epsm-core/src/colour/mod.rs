@@ -121,7 +121,7 @@ impl ColourModel {
         if self.is_empty() {
             return out;
         }
-        self.values(record, scene, &mut out);
+        self.values(record, scene, &mut out, skipped);
         if out.iter().any(|(_, d)| !d.is_finite()) {
             out.clear();
             skipped.add(DropReason::NonFinite);
@@ -138,8 +138,15 @@ impl ColourModel {
         out
     }
 
-    /// The material and emission terms.
-    fn values(&self, record: &PathRecord, scene: &Scene, out: &mut Vec<(usize, Vec3)>) {
+    /// The material and emission terms; a delta lobe's term that cannot be
+    /// differentiated is left out and counted in `skipped`.
+    fn values(
+        &self,
+        record: &PathRecord,
+        scene: &Scene,
+        out: &mut Vec<(usize, Vec3)>,
+        skipped: &mut DropCounts,
+    ) {
         let v = &record.vertices;
         let eye = scene.camera().origin_f32();
         // Radiance carried past vertex i along the path's own continuation.
@@ -171,7 +178,10 @@ impl ColourModel {
             if x.kind == VertexKind::Specular {
                 if let Some(lobe) = x.lobe {
                     for probe in probes {
-                        out.push((probe.param, probe.delta_ratio(wi, lobe) * after[i]));
+                        match probe.delta_ratio(wi, lobe) {
+                            Ok(rate) => out.push((probe.param, rate * after[i])),
+                            Err(reason) => skipped.add(reason),
+                        }
                     }
                 }
                 continue;
