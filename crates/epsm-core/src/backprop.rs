@@ -23,7 +23,7 @@ use glam::{DVec2, Vec3};
 use rayon::prelude::*;
 
 use crate::colour::ColourModel;
-use crate::drops::{DropCounts, Dropped};
+use crate::drops::{DropCounts, DropReason, Dropped};
 use crate::loss::LossEval;
 use crate::params::{ParamTable, Target};
 use crate::paths::{Classified, DiffPath, PathKind, classify};
@@ -158,8 +158,11 @@ pub fn backprop(input: &PassInput<'_>, records: &[PathRecord]) -> (Vec<f64>, Pas
                 .iter()
                 .flat_map(|c| &c.paths)
                 .filter(|p| p.kind == PathKind::Shadow);
+            // A non-finite shadow is dropped (and counted) in `solve_one`;
+            // it must not poison the mass of the pixel's other paths.
             *m += shadows
-                .map(|p| f64::from(luminance(p.contribution).abs()))
+                .map(path_weight)
+                .filter(|w| w.is_finite())
                 .sum::<f64>();
         }
     }
@@ -186,9 +189,11 @@ pub fn backprop(input: &PassInput<'_>, records: &[PathRecord]) -> (Vec<f64>, Pas
                     out.entries.push((k, f64::from(g_rgb.dot(dc) * scale)));
                 }
             }
+            if let Some(c) = c {
+                out.stats.dropped.merge(&c.skipped);
+            }
             match (c, mass.get(px)) {
                 (Some(c), Some(&m)) if m > 0.0 && !c.paths.is_empty() => {
-                    out.stats.dropped.merge(&c.skipped);
                     let g = input.loss.g_xy[px] / m;
                     for path in &c.paths {
                         solve_one(path, g, &motion, &settings, &mut out);
@@ -222,7 +227,11 @@ fn solve_one(
     out: &mut RecordOut,
 ) {
     out.stats.kinds[path.kind as usize] += 1;
-    let w = f64::from(luminance(path.contribution).abs());
+    let w = path_weight(path);
+    if !w.is_finite() {
+        out.stats.dropped.add(DropReason::NonFinite);
+        return;
+    }
     if w == 0.0 {
         return;
     }
@@ -233,6 +242,11 @@ fn solve_one(
         }
         Err(Dropped(reason)) => out.stats.dropped.add(reason),
     }
+}
+
+/// A path's share of its pixel's luminance mass.
+fn path_weight(path: &DiffPath) -> f64 {
+    f64::from(luminance(path.contribution).abs())
 }
 
 /// Rec. 709 luminance of a linear colour.

@@ -75,8 +75,13 @@ impl Adam {
         }
     }
 
-    /// One step on `theta` with gradient `grad` (non-finite entries count as 0).
-    pub fn step(&mut self, theta: &mut [f64], grad: &[f64]) {
+    /// One step on `theta` with gradient `grad`. A non-finite entry (every
+    /// path guard drops and counts before one could reach here) is refused
+    /// with its index, leaving `theta` and the moments unchanged.
+    pub fn step(&mut self, theta: &mut [f64], grad: &[f64]) -> Result<(), NonFiniteGradient> {
+        if let Some(param) = grad.iter().position(|g| !g.is_finite()) {
+            return Err(NonFiniteGradient { param });
+        }
         self.t += 1;
         let s = &self.settings;
         let scale = s.decay.powi(self.iteration as i32);
@@ -85,7 +90,7 @@ impl Adam {
             1.0 - s.beta2.powi(self.t as i32),
         );
         for k in 0..theta.len().min(grad.len()) {
-            let g = if grad[k].is_finite() { grad[k] } else { 0.0 };
+            let g = grad[k];
             self.m[k] = s.beta1 * self.m[k] + (1.0 - s.beta1) * g;
             self.v[k] = s.beta2 * self.v[k] + (1.0 - s.beta2) * g * g;
             let step = s.lr[k] * scale * (self.m[k] / c1) / ((self.v[k] / c2).sqrt() + s.epsilon);
@@ -93,7 +98,16 @@ impl Adam {
         }
         self.iteration += 1;
         self.clamp(theta);
+        Ok(())
     }
+}
+
+/// A gradient entry that is NaN or infinite, by parameter index.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("the gradient of parameter {param} is not finite")]
+pub struct NonFiniteGradient {
+    /// Index of the parameter.
+    pub param: usize,
 }
 
 #[cfg(test)]
@@ -117,14 +131,14 @@ mod tests {
         let mut x = [3.0];
         for _ in 0..300 {
             let g = [2.0 * (x[0] - 1.0)];
-            a.step(&mut x, &g);
+            a.step(&mut x, &g).expect("finite");
         }
         assert!((x[0] - 1.0).abs() < 0.05, "x = {}", x[0]);
         let mut b = adam(0.5, [2.0, 5.0]);
         let mut y = [3.0];
         for _ in 0..50 {
             let g = [2.0 * y[0]];
-            b.step(&mut y, &g);
+            b.step(&mut y, &g).expect("finite");
         }
         assert_eq!(y[0], 2.0);
     }
@@ -133,12 +147,23 @@ mod tests {
     fn first_step_has_the_learning_rate_and_reset_forgets() {
         let mut a = adam(0.25, [-f64::MAX, f64::MAX]);
         let mut x = [0.0];
-        a.step(&mut x, &[-3.0]);
+        a.step(&mut x, &[-3.0]).expect("finite");
         assert!((x[0] - 0.25).abs() < 1e-9);
         a.reset();
         assert_eq!((a.t, a.m[0], a.v[0], a.iteration), (0, 0.0, 0.0, 1));
         let json = serde_json::to_string(&a).expect("serialise");
         let back: Adam = serde_json::from_str(&json).expect("parse");
         assert_eq!(back, a);
+    }
+
+    #[test]
+    fn a_non_finite_gradient_is_refused_not_zeroed() {
+        let mut a = adam(0.25, [-f64::MAX, f64::MAX]);
+        let mut x = [1.0];
+        assert_eq!(
+            a.step(&mut x, &[f64::NAN]),
+            Err(NonFiniteGradient { param: 0 })
+        );
+        assert_eq!((x[0], a.t, a.iteration, a.m[0]), (1.0, 0, 0, 0.0));
     }
 }

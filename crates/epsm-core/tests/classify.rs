@@ -4,9 +4,13 @@
 mod common;
 
 use common::{End, Rng, Spec, Vertex, build, random_params};
+use epsm_core::backprop::{PassInput, backprop};
+use epsm_core::colour::ColourModel;
+use epsm_core::loss::LossEval;
 use epsm_core::paths::Node;
+use epsm_core::schedule::PathUse;
 use epsm_core::{DropReason, PathKind, SolveSettings, classify};
-use glam::Vec3;
+use glam::{DVec2, Vec3};
 
 fn kinds(spec: &Spec, seed: u64) -> Vec<(PathKind, usize, usize)> {
     let mut rng = Rng::new(seed);
@@ -178,4 +182,91 @@ fn a_path_carries_only_the_parameters_of_what_it_touches() {
             );
         }
     }
+}
+
+#[test]
+fn a_record_whose_only_path_is_dropped_still_counts_the_drop_in_the_pass() {
+    let mut rng = Rng::new(7);
+    let mut s = loop {
+        if let Some(s) = build(
+            &Spec::new(PathKind::ChainToSurface, vec![Vertex::Mirror], End::Surface),
+            &mut rng,
+        ) {
+            break s;
+        }
+    };
+    // The chain escapes; the parameter drives the surface it no longer reaches.
+    s.record.vertices.pop();
+    s.record.escaped = Vec3::ONE;
+    s.table.add("o1.translate.x").expect("valid key");
+    let motion = s.table.motion(&s.table.values());
+    let c = classify(
+        &s.record,
+        &s.scene,
+        &motion,
+        &SolveSettings::for_radius(1.0),
+    );
+    assert!(c.paths.is_empty());
+    assert_eq!(c.skipped.get(DropReason::NotDifferentiable), 1);
+    let (w, h) = (s.scene.camera().width, s.scene.camera().height);
+    let n = (w * h) as usize;
+    let loss = LossEval {
+        value: 1.0,
+        width: w,
+        height: h,
+        g_rgb: vec![Vec3::ZERO; n],
+        g_xy: vec![DVec2::ONE; n],
+        matched: None,
+    };
+    let colour = ColourModel::default();
+    let input = PassInput {
+        scene: &s.scene,
+        table: &s.table,
+        colour: &colour,
+        loss: &loss,
+        spp: 1,
+        use_: PathUse::All,
+    };
+    let (_, stats) = backprop(&input, std::slice::from_ref(&s.record));
+    assert_eq!(stats.dropped.get(DropReason::NotDifferentiable), 1);
+}
+
+#[test]
+fn a_non_finite_shadow_is_dropped_without_silencing_its_pixel() {
+    let mut rng = Rng::new(3);
+    let mut s = loop {
+        if let Some(s) = build(
+            &Spec::new(PathKind::Shadow, Vec::new(), End::PointNee),
+            &mut rng,
+        ) {
+            break s;
+        }
+    };
+    s.table.add("o0.translate.x").expect("valid key");
+    for c in &mut s.record.connections {
+        c.unoccluded = Vec3::NAN;
+    }
+    let (w, h) = (s.scene.camera().width, s.scene.camera().height);
+    let n = (w * h) as usize;
+    let loss = LossEval {
+        value: 1.0,
+        width: w,
+        height: h,
+        g_rgb: vec![Vec3::ZERO; n],
+        g_xy: vec![DVec2::ONE; n],
+        matched: None,
+    };
+    let colour = ColourModel::default();
+    let input = PassInput {
+        scene: &s.scene,
+        table: &s.table,
+        colour: &colour,
+        loss: &loss,
+        spp: 1,
+        use_: PathUse::All,
+    };
+    let (grad, stats) = backprop(&input, std::slice::from_ref(&s.record));
+    assert_eq!(stats.dropped.get(DropReason::NonFinite), 1);
+    assert_eq!(stats.solved, 1, "the primary path is still solved");
+    assert!(grad.iter().all(|g| g.is_finite()));
 }

@@ -222,3 +222,23 @@ fn dielectric_ior() {
         "Σ|analytic − fd| {err:.3e} vs Σ|fd| {total:.3e}"
     );
 }
+
+#[test]
+fn non_finite_material_terms_are_dropped_and_counted() {
+    let scene = scene();
+    let mut table = ParamTable::new(&scene);
+    table.add("box.albedo.r").expect("valid key");
+    let motion = table.motion(&table.values());
+    let model = ColourModel::new(&table, &scene, None);
+    let mut skipped = DropCounts::default();
+    let mut entries = Vec::new();
+    for mut r in records(&scene) {
+        r.escaped = Vec3::NAN;
+        r.vertices
+            .iter_mut()
+            .for_each(|v| v.contribution = Vec3::NAN);
+        entries.extend(model.gradient(&r, &scene, &motion, &mut skipped));
+    }
+    assert!(entries.iter().all(|(_, d)| d.is_finite()));
+    assert!(skipped.get(epsm_core::DropReason::NonFinite) > 0);
+}

@@ -11,7 +11,9 @@
 //! the oracle (well-conditioned paths), the ill-conditioned count and the
 //! drops by reason. `--json` prints one object keyed by path type with
 //! `checked`, `median_rel_err`, `max_rel_err`, `dropped` (and
-//! `ill_conditioned`, `max_adjoint_rel_err`).
+//! `ill_conditioned`, `max_adjoint_rel_err`), plus `not_classified`: the
+//! paths dropped before any check (while building or projecting them), by
+//! reason, as the text form's last line.
 
 use std::path::PathBuf;
 
@@ -101,7 +103,7 @@ pub fn run(args: &CheckArgs) -> anyhow::Result<()> {
     }
     let report = check_paths(&paths, &table, &motion, &settings);
     if args.json {
-        println!("{}", to_json(&report));
+        println!("{}", to_json(&report, &skipped));
     } else {
         print_text(&args.scene, &table, &report, &skipped);
     }
@@ -115,8 +117,8 @@ fn drops_json(d: &DropCounts) -> serde_json::Value {
         .into()
 }
 
-fn to_json(report: &CheckReport) -> serde_json::Value {
-    report
+fn to_json(report: &CheckReport, skipped: &DropCounts) -> serde_json::Value {
+    let mut out: serde_json::Map<_, _> = report
         .kinds
         .iter()
         .map(|(kind, r)| {
@@ -130,8 +132,9 @@ fn to_json(report: &CheckReport) -> serde_json::Value {
             });
             (kind.name().to_owned(), v)
         })
-        .collect::<serde_json::Map<_, _>>()
-        .into()
+        .collect();
+    out.insert("not_classified".to_owned(), drops_json(skipped));
+    out.into()
 }
 
 fn print_text(
@@ -171,5 +174,20 @@ fn print_text(
             .map(|(d, c)| format!("{}={c}", d.name()))
             .collect();
         println!("not classified: {}", s.join(" "));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use epsm_core::DropReason;
+
+    #[test]
+    fn json_reports_the_drops_made_before_any_check() {
+        let mut skipped = DropCounts::default();
+        skipped.add(DropReason::NewtonFailed);
+        skipped.add(DropReason::NewtonFailed);
+        let json = to_json(&CheckReport::default(), &skipped);
+        assert_eq!(json["not_classified"]["newton_failed"], 2);
     }
 }

@@ -19,6 +19,8 @@ use glam::{DVec2, DVec3};
 use nalgebra::{RealField, Vector3};
 use num_dual::Dual64;
 
+use crate::drops::DropReason;
+
 /// The direction `wi` (unit, away from the surface) scatters into at a
 /// surface of unit normal `n`: mirror reflection, or refraction with
 /// relative IOR `eta` (`η(wo side)/η(wi side)`). `None` under total
@@ -97,10 +99,19 @@ fn r_perp(v: DVec3, e1: DVec3, e2: DVec3) -> DVec2 {
 }
 
 /// `∂ ln w/∂θ` of a delta lobe's weight with `cos θi` changing at rate
-/// `dcos` (`cos` signed: negative from inside a dielectric).
-pub(super) fn weight_rate(material: &Material, lobe: Lobe, eta: f32, cos: f64, dcos: f64) -> f64 {
+/// `dcos` (`cos` signed: negative from inside a dielectric). Fails with
+/// [`DropReason::TotalInternalReflection`] when the weight vanishes within
+/// the difference step (a refraction at the critical angle), where `ln w`
+/// has no derivative to take.
+pub(super) fn weight_rate(
+    material: &Material,
+    lobe: Lobe,
+    eta: f32,
+    cos: f64,
+    dcos: f64,
+) -> Result<f64, DropReason> {
     let Bsdf::Dielectric(_) = material.bsdf else {
-        return 0.0;
+        return Ok(0.0);
     };
     let w = |c: f64| {
         let f = f64::from(fresnel_dielectric(
@@ -112,9 +123,9 @@ pub(super) fn weight_rate(material: &Material, lobe: Lobe, eta: f32, cos: f64, d
     let h = 1e-3 * cos.abs().max(1e-2);
     let (p, m) = (w(cos + h), w(cos - h));
     if p <= 0.0 || m <= 0.0 {
-        return 0.0;
+        return Err(DropReason::TotalInternalReflection);
     }
-    (p.ln() - m.ln()) / (2.0 * h) * dcos
+    Ok((p.ln() - m.ln()) / (2.0 * h) * dcos)
 }
 
 /// The relative IOR `η(transmitted side)/η(wi side)` the Fresnel term uses.
@@ -129,5 +140,29 @@ fn eta_of(lobe: Lobe, eta: f32, cos: f64, material: &Material) -> f32 {
             }
         }
         _ => 1.0,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use epsm_render::materials::dielectric::Dielectric;
+
+    #[test]
+    fn a_refraction_weight_reaching_total_internal_reflection_is_dropped() {
+        let glass = Material {
+            name: "glass".into(),
+            bsdf: Bsdf::Dielectric(Dielectric { ior: 1.5 }),
+            two_sided: true,
+        };
+        let lobe = Lobe::SpecularTransmission;
+        let eta = 1.0 / 1.5;
+        // From inside: the critical cosine is √(1 − η²) ≈ 0.7454.
+        assert_eq!(
+            weight_rate(&glass, lobe, eta, -0.7456, 1.0),
+            Err(DropReason::TotalInternalReflection)
+        );
+        let away = weight_rate(&glass, lobe, eta, -0.9, 1.0).expect("far from critical");
+        assert!(away.is_finite() && away != 0.0);
     }
 }

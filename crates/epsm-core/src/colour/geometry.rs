@@ -58,8 +58,12 @@ pub enum PrimaryMotion {
     OnCameraRay,
 }
 
-/// `∂ ln(f(wi, wo)·|cos_o|)` per channel at a non-delta vertex.
-fn bsdf_rate(material: &Material, m: &Moving, wi: &Dir, wo: &Dir) -> Vec3 {
+/// `∂ ln(f(wi, wo)·|cos_o|)` per channel at a non-delta vertex. A glossy
+/// channel that is zero on both sides of the difference step stays zero;
+/// one that is zero on one side only (a direction crossing the horizon
+/// within the step) has no log-derivative and fails with
+/// [`DropReason::Grazing`].
+fn bsdf_rate(material: &Material, m: &Moving, wi: &Dir, wo: &Dir) -> Result<Vec3, DropReason> {
     let (co, dco) = cos(m, wo);
     match &material.bsdf {
         Bsdf::RoughConductor(r) => {
@@ -67,7 +71,7 @@ fn bsdf_rate(material: &Material, m: &Moving, wi: &Dir, wo: &Dir) -> Vec3 {
             let (cio, dcio) = (wi.w.dot(wo.w), wi.dw.dot(wo.w) + wi.w.dot(wo.dw));
             let speed = dci.abs().max(dco.abs()).max(dcio.abs());
             if speed == 0.0 {
-                return Vec3::ZERO;
+                return Ok(Vec3::ZERO);
             }
             let h = 1e-3 * f64::from(r.alpha).max(1e-2) / speed;
             let at = |t: f64| {
@@ -75,13 +79,14 @@ fn bsdf_rate(material: &Material, m: &Moving, wi: &Dir, wo: &Dir) -> Vec3 {
                 material.eval(wi_l, wo_l, Vec2::ZERO)
             };
             let (p, q) = (at(h), at(-h));
-            let ok = p.cmpgt(Vec3::ZERO) & q.cmpgt(Vec3::ZERO);
-            let rate = (p.max(Vec3::splat(f32::MIN_POSITIVE)).ln()
-                - q.max(Vec3::splat(f32::MIN_POSITIVE)).ln())
-                / (2.0 * h as f32);
-            Vec3::select(ok, rate, Vec3::ZERO)
+            let (p_on, q_on) = (p.cmpgt(Vec3::ZERO), q.cmpgt(Vec3::ZERO));
+            if p_on != q_on {
+                return Err(DropReason::Grazing);
+            }
+            let rate = (p.ln() - q.ln()) / (2.0 * h as f32);
+            Ok(Vec3::select(p_on, rate, Vec3::ZERO))
         }
-        _ => Vec3::splat((dco / co) as f32),
+        _ => Ok(Vec3::splat((dco / co) as f32)),
     }
 }
 
@@ -141,7 +146,8 @@ impl Geometric<'_> {
         }
     }
 
-    /// The derivative along parameter `k`.
+    /// The derivative along parameter `k`, added to `out` unless it is
+    /// dropped (counted in `skipped`).
     fn one(
         &self,
         record: &PathRecord,
@@ -151,6 +157,24 @@ impl Geometric<'_> {
         out: &mut Vec<(usize, Vec3)>,
         skipped: &mut DropCounts,
     ) {
+        match self.derivative(record, nodes, lights, k, skipped) {
+            Ok(sum) if !sum.is_finite() => skipped.add(DropReason::NonFinite),
+            Ok(sum) if sum != Vec3::ZERO => out.push((k, sum)),
+            Ok(_) => {}
+            Err(reason) => skipped.add(reason),
+        }
+    }
+
+    /// `∂c/∂θ_k` of the record; terms past a delta vertex that cannot be
+    /// differentiated are left out and counted in `skipped`.
+    fn derivative(
+        &self,
+        record: &PathRecord,
+        nodes: &[Placed],
+        lights: &[Option<Placed>],
+        k: usize,
+        skipped: &mut DropCounts,
+    ) -> Result<Vec3, DropReason> {
         let v = &record.vertices;
         let m: Vec<Moving> = nodes.iter().map(|p| p.d(k)).collect();
         let material = |i: usize| {
@@ -174,10 +198,7 @@ impl Geometric<'_> {
             };
             // Emission hit here.
             let own = v[i].contribution - conns().map(|(c, _)| c.contribution).sum::<Vec3>();
-            let Some(mat) = material(i) else {
-                skipped.add(DropReason::DegenerateTriangle);
-                return;
-            };
+            let mat = material(i).ok_or(DropReason::DegenerateTriangle)?;
             let delta = delta_lobe(&v[i]);
             let on_rays = self.primary == PrimaryMotion::OnCameraRay;
             if delta.is_some()
@@ -201,7 +222,7 @@ impl Geometric<'_> {
                     Some(l) => {
                         let y = l.d(k);
                         let (wo, dr) = toward(&m[j], &y);
-                        let mut r = bsdf_rate(mat, &m[j], &wi, &wo) - Vec3::splat(2.0 * dr as f32);
+                        let mut r = bsdf_rate(mat, &m[j], &wi, &wo)? - Vec3::splat(2.0 * dr as f32);
                         if l.n != DVec3::ZERO {
                             let (cl, dcl) = cos(&y, &wo);
                             r += Vec3::splat((dcl / cl + l.area_rate(k)) as f32);
@@ -213,7 +234,7 @@ impl Geometric<'_> {
                             w: c.light_position.as_dvec3(),
                             dw: DVec3::ZERO,
                         };
-                        bsdf_rate(mat, &m[j], &wi, &wo)
+                        bsdf_rate(mat, &m[j], &wi, &wo)?
                     }
                 };
                 sum += c.contribution * (prefix + rate);
@@ -224,13 +245,13 @@ impl Geometric<'_> {
             match (m.get(j + 1), delta) {
                 (_, Some(lobe)) => {
                     let (c, dc) = cos(&m[j], &wi);
-                    let rate = chain::weight_rate(mat, lobe, v[i].eta, c, dc);
+                    let rate = chain::weight_rate(mat, lobe, v[i].eta, c, dc)?;
                     prefix += Vec3::splat(rate as f32);
                 }
                 (Some(next), None) => {
                     let (wo, dr) = toward(&m[j], next);
                     let (cn, dcn) = cos(next, &wo);
-                    prefix += bsdf_rate(mat, &m[j], &wi, &wo)
+                    prefix += bsdf_rate(mat, &m[j], &wi, &wo)?
                         + Vec3::splat((dcn / cn - 2.0 * dr + nodes[j + 1].area_rate(k)) as f32);
                 }
                 (None, _) => {}
@@ -239,12 +260,61 @@ impl Geometric<'_> {
         if valid {
             sum += record.escaped * prefix;
         }
-        if sum.is_finite() {
-            if sum != Vec3::ZERO {
-                out.push((k, sum));
-            }
-        } else {
-            skipped.add(DropReason::NonFinite);
+        Ok(sum)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use epsm_render::materials::rough_conductor::RoughConductor;
+
+    fn metal() -> Material {
+        Material {
+            name: "metal".into(),
+            bsdf: Bsdf::RoughConductor(RoughConductor {
+                alpha: 0.1,
+                tint: Vec3::new(0.9, 0.0, 0.5),
+            }),
+            two_sided: false,
         }
+    }
+
+    fn still_vertex() -> Moving {
+        Moving {
+            x: DVec3::ZERO,
+            dx: DVec3::ZERO,
+            n: DVec3::Z,
+            dn: DVec3::ZERO,
+        }
+    }
+
+    #[test]
+    fn a_glossy_direction_crossing_the_horizon_within_the_step_is_dropped() {
+        let wi = Dir {
+            w: DVec3::new(-0.6, 0.0, 0.8),
+            dw: DVec3::ZERO,
+        };
+        // Leaving 1e-6 above the horizon, sinking at unit rate: the
+        // difference step (1e-4) crosses it.
+        let z: f64 = 1e-6;
+        let wo = Dir {
+            w: DVec3::new((1.0 - z * z).sqrt(), 0.0, z),
+            dw: DVec3::new(z, 0.0, -1.0),
+        };
+        assert_eq!(
+            bsdf_rate(&metal(), &still_vertex(), &wi, &wo),
+            Err(DropReason::Grazing)
+        );
+        // Well above the horizon: the zero-tint channel stays exactly zero.
+        let wo = Dir {
+            w: DVec3::new(0.6, 0.0, 0.8),
+            dw: DVec3::new(0.8, 0.0, -0.6),
+        };
+        let rate = bsdf_rate(&metal(), &still_vertex(), &wi, &wo).expect("above the horizon");
+        assert!(
+            rate.x.is_finite() && rate.x != 0.0 && rate.y == 0.0,
+            "{rate}"
+        );
     }
 }

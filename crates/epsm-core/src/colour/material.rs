@@ -15,6 +15,7 @@ use epsm_render::materials::fresnel::fresnel_dielectric;
 use epsm_render::materials::{Bsdf, Lobe, Material, Texture};
 use glam::{Vec2, Vec3};
 
+use crate::drops::DropReason;
 use crate::params::Target;
 
 /// One material parameter with the material moved to `θ ± h`.
@@ -72,8 +73,11 @@ impl Probe {
         )
     }
 
-    /// `∂ ln w/∂θ` of a delta lobe's weight `w` for local `wi`.
-    pub(super) fn delta_ratio(&self, wi: Vec3, lobe: Lobe) -> Vec3 {
+    /// `∂ ln w/∂θ` of a delta lobe's weight `w` for local `wi`. Fails with
+    /// [`DropReason::TotalInternalReflection`] when the weight vanishes on
+    /// one side of the difference only (a refraction at the critical angle
+    /// of `ior ± h`).
+    pub(super) fn delta_ratio(&self, wi: Vec3, lobe: Lobe) -> Result<Vec3, DropReason> {
         let w = |m: &Material| match &m.bsdf {
             Bsdf::Dielectric(d) => {
                 let eta = if wi.z >= 0.0 { d.ior } else { 1.0 / d.ior };
@@ -86,14 +90,53 @@ impl Probe {
             }
             _ => Vec3::ZERO,
         };
-        log_rate(w(&self.plus), w(&self.minus), self.width)
+        let (p, m) = (w(&self.plus), w(&self.minus));
+        if p.cmpgt(Vec3::ZERO) != m.cmpgt(Vec3::ZERO) {
+            return Err(DropReason::TotalInternalReflection);
+        }
+        Ok(log_rate(p, m, self.width))
     }
 }
 
 /// `∂ ln f` per channel from `f(θ + h) = p`, `f(θ − h) = m` over `width`
 /// (0 where `f = 0`).
 fn log_rate(p: Vec3, m: Vec3, width: f32) -> Vec3 {
-    let tiny = Vec3::splat(1e-20);
     let f = 0.5 * (p + m);
-    Vec3::select(f.cmpgt(tiny), (p - m) / width / f.max(tiny), Vec3::ZERO)
+    Vec3::select(f.cmpgt(Vec3::ZERO), (p - m) / width / f, Vec3::ZERO)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn log_rate_of_a_small_positive_value_is_not_zeroed() {
+        let r = log_rate(Vec3::splat(2e-21), Vec3::splat(1e-21), 1.0);
+        assert!(
+            (r - Vec3::splat(2.0 / 3.0)).abs().max_element() < 1e-6,
+            "{r}"
+        );
+        assert_eq!(log_rate(Vec3::ZERO, Vec3::ZERO, 1.0), Vec3::ZERO);
+    }
+
+    #[test]
+    fn an_ior_difference_reaching_total_internal_reflection_is_dropped() {
+        use epsm_render::materials::dielectric::Dielectric;
+        let glass = Material {
+            name: "glass".into(),
+            bsdf: Bsdf::Dielectric(Dielectric { ior: 1.5 }),
+            two_sided: true,
+        };
+        let probe = Probe::new(0, &glass, Target::Ior { material: 0 }, 1.5);
+        let lobe = Lobe::SpecularTransmission;
+        // From inside, just past the critical cosine of ior 1.5 (0.745356)
+        // but not of ior 1.5 + h (0.745415).
+        let wi = |z: f32| Vec3::new((1.0 - z * z).sqrt(), 0.0, -z);
+        assert_eq!(
+            probe.delta_ratio(wi(0.74538), lobe),
+            Err(DropReason::TotalInternalReflection)
+        );
+        let away = probe.delta_ratio(wi(0.9), lobe).expect("far from critical");
+        assert!(away.is_finite() && away != Vec3::ZERO);
+    }
 }

@@ -41,7 +41,7 @@ use geometry::Geometric;
 pub use geometry::PrimaryMotion;
 use material::Probe;
 
-use crate::drops::DropCounts;
+use crate::drops::{DropCounts, DropReason};
 use crate::motion::Motion;
 use crate::params::{ParamTable, Target};
 
@@ -106,7 +106,10 @@ impl ColourModel {
     /// `dc/dθ` of one path sample as `(parameter, ∂c/∂θ per channel)`
     /// entries (a parameter may appear more than once; entries add up).
     /// `motion` is the placement at θ; terms left out are counted in
-    /// `skipped`.
+    /// `skipped`. Material and emission terms of a record with a non-finite
+    /// value (e.g. a sample the tracer zeroed as non-finite, whose vertex
+    /// contributions stay recorded) are dropped together and counted as
+    /// [`DropReason::NonFinite`].
     pub fn gradient(
         &self,
         record: &PathRecord,
@@ -118,7 +121,11 @@ impl ColourModel {
         if self.is_empty() {
             return out;
         }
-        self.values(record, scene, &mut out);
+        self.values(record, scene, &mut out, skipped);
+        if out.iter().any(|(_, d)| !d.is_finite()) {
+            out.clear();
+            skipped.add(DropReason::NonFinite);
+        }
         if let Some(primary) = self.primary {
             let geo = Geometric {
                 scene,
@@ -131,8 +138,15 @@ impl ColourModel {
         out
     }
 
-    /// The material and emission terms.
-    fn values(&self, record: &PathRecord, scene: &Scene, out: &mut Vec<(usize, Vec3)>) {
+    /// The material and emission terms; a delta lobe's term that cannot be
+    /// differentiated is left out and counted in `skipped`.
+    fn values(
+        &self,
+        record: &PathRecord,
+        scene: &Scene,
+        out: &mut Vec<(usize, Vec3)>,
+        skipped: &mut DropCounts,
+    ) {
         let v = &record.vertices;
         let eye = scene.camera().origin_f32();
         // Radiance carried past vertex i along the path's own continuation.
@@ -164,7 +178,10 @@ impl ColourModel {
             if x.kind == VertexKind::Specular {
                 if let Some(lobe) = x.lobe {
                     for probe in probes {
-                        out.push((probe.param, probe.delta_ratio(wi, lobe) * after[i]));
+                        match probe.delta_ratio(wi, lobe) {
+                            Ok(rate) => out.push((probe.param, rate * after[i])),
+                            Err(reason) => skipped.add(reason),
+                        }
                     }
                 }
                 continue;

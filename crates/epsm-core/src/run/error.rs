@@ -26,6 +26,11 @@ pub enum OptimizeError {
     /// A request that does not fit the problem.
     #[error("{0}")]
     Invalid(String),
+    /// The summed gradient of a parameter was NaN or infinite. Path guards
+    /// drop and count such paths, so this is a bug; the step is refused
+    /// rather than taken with the entry zeroed.
+    #[error("the gradient of parameter `{0}` is not finite")]
+    NonFiniteGradient(String),
 }
 
 /// Result with [`OptimizeError`].

@@ -331,7 +331,10 @@ impl Optimization {
             },
         };
         let mut theta = self.theta.clone();
-        self.adam.step(&mut theta, &g.grad);
+        self.adam.step(&mut theta, &g.grad).map_err(|e| {
+            let key = self.problem.params.get(e.param).map(|p| p.key.clone());
+            OptimizeError::NonFiniteGradient(key.unwrap_or_else(|| e.param.to_string()))
+        })?;
         self.set_theta(&theta);
         self.iteration += 1;
         self.rows.push(row.clone());

@@ -199,9 +199,17 @@ pub(crate) fn walk<'a>(doc: &'a gltf::Document, file: &Path) -> Result<Vec<Place
         // glTF rotations are unit quaternions (glTF 2.0 §5.25); gltf's matrix
         // of any other would be a silent identity or a scaled rotation.
         if let gltf::scene::Transform::Decomposed { rotation, .. } = node.transform() {
-            let norm = rotation.map(f64::from).iter().map(|q| q * q).sum::<f64>().sqrt();
+            let norm = rotation
+                .map(f64::from)
+                .iter()
+                .map(|q| q * q)
+                .sum::<f64>()
+                .sqrt();
             if norm.is_nan() || (norm - 1.0).abs() > ROTATION_TOLERANCE {
-                let msg = format!("expected a unit quaternion, found one of length {}", shown(norm));
+                let msg = format!(
+                    "expected a unit quaternion, found one of length {}",
+                    shown(norm)
+                );
                 return Err(fail(format!("{field}.rotation"), &msg));
             }
         }
