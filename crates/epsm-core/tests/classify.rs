@@ -3,30 +3,20 @@
 
 mod common;
 
-use common::{End, Rng, Spec, Vertex, build, random_params};
-use epsm_core::backprop::{PassInput, backprop};
+use common::{End, Rng, Spec, Synth, Vertex, build, random_params};
+use epsm_core::backprop::{PassInput, PassStats, backprop};
 use epsm_core::colour::ColourModel;
 use epsm_core::loss::LossEval;
-use epsm_core::paths::Node;
+use epsm_core::paths::{Classified, Node};
 use epsm_core::schedule::PathUse;
 use epsm_core::{DropReason, PathKind, SolveSettings, classify};
 use glam::{DVec2, Vec3};
 
 fn kinds(spec: &Spec, seed: u64) -> Vec<(PathKind, usize, usize)> {
     let mut rng = Rng::new(seed);
-    let mut s = loop {
-        if let Some(s) = build(spec, &mut rng) {
-            break s;
-        }
-    };
+    let mut s = synth(spec, &mut rng);
     random_params(&mut s.table, &s.objects, &s.lights, &mut rng);
-    let motion = s.table.motion(&s.table.values());
-    let c = classify(
-        &s.record,
-        &s.scene,
-        &motion,
-        &SolveSettings::for_radius(1.0),
-    );
+    let c = classified(&s);
     assert_eq!(c.skipped.total(), 0);
     c.paths
         .iter()
@@ -97,38 +87,15 @@ fn each_record_pattern_yields_its_paths_with_the_right_unknowns() {
 
 #[test]
 fn background_endings_are_counted_and_untouched_paths_are_not_returned() {
-    let mut rng = Rng::new(7);
-    let mut s = loop {
-        if let Some(s) = build(
-            &Spec::new(PathKind::ChainToSurface, vec![Vertex::Mirror], End::Surface),
-            &mut rng,
-        ) {
-            break s;
-        }
-    };
-    // The chain escapes instead of reaching D.
-    s.record.vertices.pop();
-    s.record.escaped = Vec3::ONE;
-    let motion = s.table.motion(&s.table.values());
-    let c = classify(
-        &s.record,
-        &s.scene,
-        &motion,
-        &SolveSettings::for_radius(1.0),
-    );
+    let mut s = escaping_chain();
+    let c = classified(&s);
     assert!(
         c.paths.is_empty(),
         "no parameter is bound: nothing is returned"
     );
     assert_eq!(c.skipped.get(DropReason::NotDifferentiable), 1);
     s.table.add("o0.translate.x").expect("valid key");
-    let motion = s.table.motion(&s.table.values());
-    let c = classify(
-        &s.record,
-        &s.scene,
-        &motion,
-        &SolveSettings::for_radius(1.0),
-    );
+    let c = classified(&s);
     assert_eq!(
         c.paths.iter().map(|p| p.kind).collect::<Vec<_>>(),
         vec![PathKind::Primary]
@@ -137,15 +104,10 @@ fn background_endings_are_counted_and_untouched_paths_are_not_returned() {
 
 #[test]
 fn a_path_carries_only_the_parameters_of_what_it_touches() {
-    let mut rng = Rng::new(11);
-    let mut s = loop {
-        if let Some(s) = build(
-            &Spec::new(PathKind::ChainToSurface, vec![Vertex::Mirror], End::Surface),
-            &mut rng,
-        ) {
-            break s;
-        }
-    };
+    let mut s = synth(
+        &Spec::new(PathKind::ChainToSurface, vec![Vertex::Mirror], End::Surface),
+        &mut Rng::new(11),
+    );
     // Every axis of every object and the camera yaw are bound; the primary
     // path touches one object, the chain three.
     for name in &s.objects {
@@ -156,15 +118,7 @@ fn a_path_carries_only_the_parameters_of_what_it_touches() {
         }
     }
     s.table.add("camera.yaw").expect("valid key");
-    let motion = s.table.motion(&s.table.values());
-    for p in classify(
-        &s.record,
-        &s.scene,
-        &motion,
-        &SolveSettings::for_radius(1.0),
-    )
-    .paths
-    {
+    for p in classified(&s).paths {
         let objects: std::collections::BTreeSet<u32> = p
             .nodes
             .iter()
@@ -186,66 +140,35 @@ fn a_path_carries_only_the_parameters_of_what_it_touches() {
 
 #[test]
 fn a_record_whose_only_path_is_dropped_still_counts_the_drop_in_the_pass() {
-    let mut rng = Rng::new(7);
-    let mut s = loop {
-        if let Some(s) = build(
-            &Spec::new(PathKind::ChainToSurface, vec![Vertex::Mirror], End::Surface),
-            &mut rng,
-        ) {
-            break s;
-        }
-    };
-    // The chain escapes; the parameter drives the surface it no longer reaches.
-    s.record.vertices.pop();
-    s.record.escaped = Vec3::ONE;
+    let mut s = escaping_chain();
+    // The parameter drives the surface the chain no longer reaches.
     s.table.add("o1.translate.x").expect("valid key");
-    let motion = s.table.motion(&s.table.values());
-    let c = classify(
-        &s.record,
-        &s.scene,
-        &motion,
-        &SolveSettings::for_radius(1.0),
-    );
+    let c = classified(&s);
     assert!(c.paths.is_empty());
     assert_eq!(c.skipped.get(DropReason::NotDifferentiable), 1);
-    let (w, h) = (s.scene.camera().width, s.scene.camera().height);
-    let n = (w * h) as usize;
-    let loss = LossEval {
-        value: 1.0,
-        width: w,
-        height: h,
-        g_rgb: vec![Vec3::ZERO; n],
-        g_xy: vec![DVec2::ONE; n],
-        matched: None,
-    };
-    let colour = ColourModel::default();
-    let input = PassInput {
-        scene: &s.scene,
-        table: &s.table,
-        colour: &colour,
-        loss: &loss,
-        spp: 1,
-        use_: PathUse::All,
-    };
-    let (_, stats) = backprop(&input, std::slice::from_ref(&s.record));
+    let (_, stats) = backprop_alone(&s);
     assert_eq!(stats.dropped.get(DropReason::NotDifferentiable), 1);
 }
 
 #[test]
 fn a_non_finite_shadow_is_dropped_without_silencing_its_pixel() {
-    let mut rng = Rng::new(3);
-    let mut s = loop {
-        if let Some(s) = build(
-            &Spec::new(PathKind::Shadow, Vec::new(), End::PointNee),
-            &mut rng,
-        ) {
-            break s;
-        }
-    };
+    let mut s = synth(
+        &Spec::new(PathKind::Shadow, Vec::new(), End::PointNee),
+        &mut Rng::new(3),
+    );
     s.table.add("o0.translate.x").expect("valid key");
     for c in &mut s.record.connections {
         c.unoccluded = Vec3::NAN;
     }
+    let (grad, stats) = backprop_alone(&s);
+    assert_eq!(stats.dropped.get(DropReason::NonFinite), 1);
+    assert_eq!(stats.solved, 1, "the primary path is still solved");
+    assert!(grad.iter().all(|g| g.is_finite()));
+}
+
+/// Backpropagates `s`'s record alone through a loss whose screen-space
+/// gradient is one in every pixel (and zero in colour).
+fn backprop_alone(s: &Synth) -> (Vec<f64>, PassStats) {
     let (w, h) = (s.scene.camera().width, s.scene.camera().height);
     let n = (w * h) as usize;
     let loss = LossEval {
@@ -265,8 +188,37 @@ fn a_non_finite_shadow_is_dropped_without_silencing_its_pixel() {
         spp: 1,
         use_: PathUse::All,
     };
-    let (grad, stats) = backprop(&input, std::slice::from_ref(&s.record));
-    assert_eq!(stats.dropped.get(DropReason::NonFinite), 1);
-    assert_eq!(stats.solved, 1, "the primary path is still solved");
-    assert!(grad.iter().all(|g| g.is_finite()));
+    backprop(&input, std::slice::from_ref(&s.record))
+}
+
+/// The first path `spec` builds with `rng` (building retries until one fits).
+fn synth(spec: &Spec, rng: &mut Rng) -> Synth {
+    loop {
+        if let Some(s) = build(spec, rng) {
+            return s;
+        }
+    }
+}
+
+/// A camera → mirror → surface chain whose record escapes after the mirror
+/// instead of reaching the surface D.
+fn escaping_chain() -> Synth {
+    let mut s = synth(
+        &Spec::new(PathKind::ChainToSurface, vec![Vertex::Mirror], End::Surface),
+        &mut Rng::new(7),
+    );
+    s.record.vertices.pop();
+    s.record.escaped = Vec3::ONE;
+    s
+}
+
+/// `s`'s record classified at the table's current values (unit scene radius).
+fn classified(s: &Synth) -> Classified {
+    let motion = s.table.motion(&s.table.values());
+    classify(
+        &s.record,
+        &s.scene,
+        &motion,
+        &SolveSettings::for_radius(1.0),
+    )
 }
