@@ -330,3 +330,50 @@ fn scaling_by_1e_3_and_1e3_validates_light_chains_and_shadows() {
         }
     }
 }
+
+#[test]
+fn ggx_roughness_from_1e_4_to_1_validates_in_caustics() {
+    for (alpha, seed) in [(1e-4, 48), (1.0, 49)] {
+        let r = run(200, seed, PathKind::Caustic, 1.0, |rng| {
+            let len = 1 + rng.below(2);
+            Spec::new(
+                PathKind::Caustic,
+                chain(rng, len, |_| Vertex::Glossy { alpha }),
+                End::Emitter,
+            )
+        });
+        let name = format!("caustic alpha {alpha}");
+        assert_validated(&name, &r, 200, 1e-6, 4);
+        assert_no_non_finite_drops(&name, &r);
+    }
+}
+
+#[test]
+fn skinny_triangles_and_axis_normals_validate_on_light_chains_and_caustics() {
+    for (kind, seed) in [(PathKind::ChainToLight, 50), (PathKind::Caustic, 51)] {
+        let axes = [DVec3::X, DVec3::Y, DVec3::Z]
+            .into_iter()
+            .flat_map(|a| [a, -a]);
+        let shapes = [(1e-4, (1.0, 2.0), None), (1.0, (1e-4, 2e-4), None)];
+        // The builder orients an axis normal towards `wi`: ±axis differ
+        // only by their seeds.
+        let cases = shapes
+            .into_iter()
+            .chain(axes.map(|a| (1.0, (1.0, 2.0), Some(a))));
+        for (i, (aspect, angle, axis)) in cases.enumerate() {
+            let r = run(100, 16 * seed + i as u64, kind, 1.0, |rng| {
+                let len = 1 + rng.below(2);
+                Spec {
+                    aspect,
+                    angle,
+                    axis,
+                    smooth: false,
+                    ..light_chain(rng, kind, len, any_vertex)
+                }
+            });
+            let name = format!("{kind:?} aspect {aspect} angle {angle:?} axis {axis:?}");
+            assert_validated(&name, &r, 100, 1e-6, 4);
+            assert_no_non_finite_drops(&name, &r);
+        }
+    }
+}
