@@ -5,7 +5,7 @@ mod common;
 
 use common::{End, Rng, Spec, Vertex, build, random_params};
 use epsm_core::check::{CheckSettings, KindReport, check_path};
-use epsm_core::{PathKind, classify, solve_adjoint};
+use epsm_core::{DropReason, PathKind, classify, solve_adjoint};
 use glam::{DVec2, DVec3};
 
 /// Checks `n` configurations made by `make`, asserting finite adjoint
@@ -242,5 +242,138 @@ fn shading_normals_along_every_axis_validate() {
             }
         });
         assert_validated(&format!("axis {axis}"), &r, 100, 1e-6, 2);
+    }
+}
+
+/// A chain of `len` S vertices ending at a random light end; NEE ends need a
+/// glossy last vertex (a delta lobe cannot connect to a light).
+fn light_chain(rng: &mut Rng, kind: PathKind, len: usize, vertex: fn(&mut Rng) -> Vertex) -> Spec {
+    let mut vertices = chain(rng, len, vertex);
+    let end = [End::AreaNee, End::PointNee, End::Emitter][rng.below(3)];
+    if end != End::Emitter
+        && let Some(last) = vertices.last_mut()
+    {
+        *last = Vertex::Glossy {
+            alpha: rng.range(0.05, 0.4),
+        };
+    }
+    Spec::new(kind, vertices, end)
+}
+
+/// Drops of a stress case are for a geometric reason, never a NaN.
+fn assert_no_non_finite_drops(name: &str, r: &KindReport) {
+    assert_eq!(
+        r.dropped.get(DropReason::NonFinite),
+        0,
+        "{name}: non-finite drops {:?}",
+        r.dropped.nonzero().collect::<Vec<_>>()
+    );
+}
+
+#[test]
+fn grazing_incidence_on_light_chains_and_caustics_validates_or_is_counted() {
+    for (kind, seed) in [(PathKind::ChainToLight, 40), (PathKind::Caustic, 41)] {
+        let r = run(200, seed, kind, 1.0, |rng| Spec {
+            cos: (2e-4, 1e-3),
+            smooth: false,
+            ..light_chain(rng, kind, 1, any_vertex)
+        });
+        let name = format!("grazing {kind:?}");
+        assert_validated(&name, &r, 200, 1e-6, 200);
+        assert_no_non_finite_drops(&name, &r);
+        assert!(r.checked() > 0, "{name}: some paths are differentiated");
+    }
+}
+
+#[test]
+fn chains_of_8_vertices_to_lights_and_caustics_validate() {
+    // ChainToLight: camera, 7 S vertices, light; caustic: camera, diffuse,
+    // 7 S vertices, light.
+    for (kind, seed) in [(PathKind::ChainToLight, 42), (PathKind::Caustic, 43)] {
+        let r = run(100, seed, kind, 1.0, |rng| {
+            light_chain(rng, kind, 7, any_vertex)
+        });
+        let name = format!("8+ vertices {kind:?}");
+        assert_validated(&name, &r, 100, 1e-6, 10);
+        assert_no_non_finite_drops(&name, &r);
+    }
+}
+
+#[test]
+fn ior_1_0001_and_2_4_validate_in_caustics() {
+    for (ior, seed) in [(1.0001, 44), (2.4, 45)] {
+        let r = run(200, seed, PathKind::Caustic, 1.0, |rng| {
+            let len = 1 + rng.below(3);
+            Spec::new(
+                PathKind::Caustic,
+                chain(rng, len, |_| Vertex::Glass { ior }),
+                End::Emitter,
+            )
+        });
+        let name = format!("caustic ior {ior}");
+        assert_validated(&name, &r, 200, 1e-6, 6);
+        assert_no_non_finite_drops(&name, &r);
+    }
+}
+
+#[test]
+fn scaling_by_1e_3_and_1e3_validates_light_chains_and_shadows() {
+    for (kind, seed) in [(PathKind::ChainToLight, 46), (PathKind::Shadow, 47)] {
+        for scale in [1e-3, 1e3] {
+            let r = run(200, seed, kind, scale, |rng| {
+                let len = 1 + rng.below(3);
+                light_chain(rng, kind, len, any_vertex)
+            });
+            let name = format!("scale {scale} {kind:?}");
+            assert_validated(&name, &r, 200, 1e-6, 4);
+            assert_no_non_finite_drops(&name, &r);
+        }
+    }
+}
+
+#[test]
+fn ggx_roughness_from_1e_4_to_1_validates_in_caustics() {
+    for (alpha, seed) in [(1e-4, 48), (1.0, 49)] {
+        let r = run(200, seed, PathKind::Caustic, 1.0, |rng| {
+            let len = 1 + rng.below(2);
+            Spec::new(
+                PathKind::Caustic,
+                chain(rng, len, |_| Vertex::Glossy { alpha }),
+                End::Emitter,
+            )
+        });
+        let name = format!("caustic alpha {alpha}");
+        assert_validated(&name, &r, 200, 1e-6, 4);
+        assert_no_non_finite_drops(&name, &r);
+    }
+}
+
+#[test]
+fn skinny_triangles_and_axis_normals_validate_on_light_chains_and_caustics() {
+    for (kind, seed) in [(PathKind::ChainToLight, 50), (PathKind::Caustic, 51)] {
+        let axes = [DVec3::X, DVec3::Y, DVec3::Z]
+            .into_iter()
+            .flat_map(|a| [a, -a]);
+        let shapes = [(1e-4, (1.0, 2.0), None), (1.0, (1e-4, 2e-4), None)];
+        // The builder orients an axis normal towards `wi`: ±axis differ
+        // only by their seeds.
+        let cases = shapes
+            .into_iter()
+            .chain(axes.map(|a| (1.0, (1.0, 2.0), Some(a))));
+        for (i, (aspect, angle, axis)) in cases.enumerate() {
+            let r = run(100, 16 * seed + i as u64, kind, 1.0, |rng| {
+                let len = 1 + rng.below(2);
+                Spec {
+                    aspect,
+                    angle,
+                    axis,
+                    smooth: false,
+                    ..light_chain(rng, kind, len, any_vertex)
+                }
+            });
+            let name = format!("{kind:?} aspect {aspect} angle {angle:?} axis {axis:?}");
+            assert_validated(&name, &r, 100, 1e-6, 4);
+            assert_no_non_finite_drops(&name, &r);
+        }
     }
 }

@@ -184,3 +184,63 @@ fn duplicate_points_far_apart_clouds_and_tiny_epsilon() {
         );
     }
 }
+
+#[test]
+fn the_smallest_allowed_blur_handles_every_degenerate_cloud() {
+    let tiny = |debias| {
+        Matcher::Sinkhorn(SinkhornSettings {
+            blur: crate::MIN_BLUR,
+            debias,
+            ..SinkhornSettings::default()
+        })
+    };
+    let mut rng = Rng::new(4);
+    let other = random_cloud(&mut rng, 100, 1.0);
+    let far = translated(&other, [0.0, 0.0, 0.0, 1000.0, -1000.0]);
+    let dup = PointCloud::from_points(&vec![[0.5; 5]; 100]).unwrap_or_else(|e| panic!("{e}"));
+    let a = PointCloud::from_points(&[[0.1, 0.2, 0.3, 0.4, 0.5]]).unwrap_or_else(|e| panic!("{e}"));
+    let b = PointCloud::from_points(&[[0.5, 0.2, 0.3, 0.4, 0.0]]).unwrap_or_else(|e| panic!("{e}"));
+    for debias in [false, true] {
+        let m = tiny(debias);
+        for (s, t) in [
+            (&other, &other),
+            (&dup, &dup),
+            (&dup, &other),
+            (&other, &dup),
+            (&other, &far),
+            (&a, &b),
+            (&a, &a),
+        ] {
+            let r = m.solve(s, t).unwrap_or_else(|e| panic!("{e}"));
+            assert!(all_finite(&r), "debias {debias}: non-finite output");
+        }
+        let r = m.solve(&a, &b).unwrap_or_else(|e| panic!("{e}"));
+        assert!(
+            (r.gradient[0][0] - 2.0 * (0.1 - 0.5)).abs() < 1e-4
+                && (r.gradient[0][4] - 2.0 * 0.5).abs() < 1e-4,
+            "debias {debias}: single point {:?}",
+            r.gradient
+        );
+        let r = m.solve(&other, &far).unwrap_or_else(|e| panic!("{e}"));
+        let mean_x = r.gradient.iter().map(|g| g[3]).sum::<f32>() / 100.0;
+        assert!(
+            (mean_x + 2000.0 / 100.0).abs() < 0.5,
+            "debias {debias}: far-apart mean x gradient {mean_x}"
+        );
+    }
+    let r = tiny(true)
+        .solve(&other, &other)
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert!(r.loss.abs() <= 1e-12, "debiased identical loss {}", r.loss);
+}
+
+#[test]
+fn sliced_identical_clouds_give_zero_loss_and_gradient() {
+    let mut rng = Rng::new(5);
+    let a = random_cloud(&mut rng, 300, 1.0);
+    let r = Matcher::sliced()
+        .solve(&a, &a)
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert!(r.loss.abs() <= 1e-12, "loss {}", r.loss);
+    assert!(r.gradient.iter().flatten().all(|&g| g == 0.0));
+}
