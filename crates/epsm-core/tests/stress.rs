@@ -302,17 +302,8 @@ fn chains_of_8_vertices_to_lights_and_caustics_validate() {
 #[test]
 fn ior_1_0001_and_2_4_validate_in_caustics() {
     for (ior, seed) in [(1.0001, 44), (2.4, 45)] {
-        let r = run(200, seed, PathKind::Caustic, 1.0, |rng| {
-            let len = 1 + rng.below(3);
-            Spec::new(
-                PathKind::Caustic,
-                chain(rng, len, |_| Vertex::Glass { ior }),
-                End::Emitter,
-            )
-        });
         let name = format!("caustic ior {ior}");
-        assert_validated(&name, &r, 200, 1e-6, 6);
-        assert_no_non_finite_drops(&name, &r);
+        caustics_of(&name, Vertex::Glass { ior }, 3, seed, 6);
     }
 }
 
@@ -334,18 +325,21 @@ fn scaling_by_1e_3_and_1e3_validates_light_chains_and_shadows() {
 #[test]
 fn ggx_roughness_from_1e_4_to_1_validates_in_caustics() {
     for (alpha, seed) in [(1e-4, 48), (1.0, 49)] {
-        let r = run(200, seed, PathKind::Caustic, 1.0, |rng| {
-            let len = 1 + rng.below(2);
-            Spec::new(
-                PathKind::Caustic,
-                chain(rng, len, |_| Vertex::Glossy { alpha }),
-                End::Emitter,
-            )
-        });
         let name = format!("caustic alpha {alpha}");
-        assert_validated(&name, &r, 200, 1e-6, 4);
-        assert_no_non_finite_drops(&name, &r);
+        caustics_of(&name, Vertex::Glossy { alpha }, 2, seed, 4);
     }
+}
+
+/// 200 caustics (camera, diffuse point, 1 to `max_len` copies of `vertex`,
+/// emitter) validate, at most `max_bad` ill-conditioned or dropped, none
+/// dropped as non-finite.
+fn caustics_of(name: &str, vertex: Vertex, max_len: usize, seed: u64, max_bad: usize) {
+    let r = run(200, seed, PathKind::Caustic, 1.0, |rng| {
+        let len = 1 + rng.below(max_len);
+        Spec::new(PathKind::Caustic, chain(rng, len, |_| vertex), End::Emitter)
+    });
+    assert_validated(name, &r, 200, 1e-6, max_bad);
+    assert_no_non_finite_drops(name, &r);
 }
 
 #[test]
