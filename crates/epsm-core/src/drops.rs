@@ -32,7 +32,10 @@ pub enum DropReason {
     /// no position to differentiate.
     NotDifferentiable,
     /// A Newton re-solve did not converge (projecting a record onto its
-    /// manifold in `classify`, or the oracle at a perturbed θ).
+    /// manifold in `classify`, or the oracle at a perturbed θ) while `A`
+    /// at its last iterate passed the checks; when it did not, the drop is
+    /// [`DropReason::Singular`] or [`DropReason::IllConditioned`] instead
+    /// (a re-solve stalls at a fold, where the solutions merge and vanish).
     NewtonFailed,
 }
 

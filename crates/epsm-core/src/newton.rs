@@ -15,7 +15,7 @@ use crate::drops::{DropReason, Dropped};
 use crate::motion::Motion;
 use crate::params::{ParamTable, Target};
 use crate::paths::{DiffPath, Node};
-use crate::solve::SolveSettings;
+use crate::solve::{SolveSettings, factor};
 
 /// Stopping rules of the re-solve.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -144,7 +144,18 @@ pub fn resolve(
             residual: r,
         })
     } else {
-        Err(Dropped(DropReason::NewtonFailed))
+        Err(Dropped(failure_reason(a, settings)))
+    }
+}
+
+/// Why Newton stalled with system matrix `a` at its last iterate: `A`
+/// singular or ill-conditioned there (a fold, where two solutions merge and
+/// vanish: a nearby configuration has none), by the checks of the adjoint
+/// solve, else [`DropReason::NewtonFailed`].
+fn failure_reason(a: nalgebra::DMatrix<f64>, settings: &SolveSettings) -> DropReason {
+    match factor(a, settings) {
+        Err(reason @ (DropReason::Singular | DropReason::IllConditioned)) => reason,
+        _ => DropReason::NewtonFailed,
     }
 }
 
