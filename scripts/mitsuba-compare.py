@@ -265,13 +265,6 @@ def epsm_bench(binary, path, spp, max_depth):
     return {run["threads"]: run["samples_per_s"] for run in json.loads(out)["runs"]}
 
 
-def epsm_mean(binary, path, spp):
-    with tempfile.TemporaryDirectory() as tmp:
-        exr = pathlib.Path(tmp) / "epsm.exr"
-        run_epsm(binary, ["render", path, "--spp", str(spp), "-o", str(exr)])
-        return np.array(mi.Bitmap(str(exr)), dtype=np.float64)[..., :3].reshape(-1, 3).mean(axis=0)
-
-
 BLOCK = 8
 
 
@@ -282,10 +275,12 @@ def block_means(img):
     return img[:h, :w].reshape(h // BLOCK, BLOCK, w // BLOCK, BLOCK, -1).mean(axis=(1, 3))
 
 
-def epsm_image(binary, path, spp, seed):
+def epsm_image(binary, path, spp, seed=None):
+    """epsm's render of `path` (rows x columns x RGB), with the scene's seed unless `seed`."""
+    seeded = [] if seed is None else ["--seed", str(seed)]
     with tempfile.TemporaryDirectory() as tmp:
         exr = pathlib.Path(tmp) / "epsm.exr"
-        run_epsm(binary, ["render", path, "--spp", str(spp), "--seed", str(seed), "-o", str(exr)])
+        run_epsm(binary, ["render", path, "--spp", str(spp), *seeded, "-o", str(exr)])
         return np.array(mi.Bitmap(str(exr)), dtype=np.float64)[..., :3]
 
 
@@ -373,7 +368,7 @@ def main():
     print("|---|---|---|---|---|---|---|---|")
     for path in scenes:
         # epsm first: it rejects a bad scene file with an error naming the field.
-        ours_mean = epsm_mean(args.epsm, path, args.spp)
+        ours_mean = epsm_image(args.epsm, path, args.spp).reshape(-1, 3).mean(axis=0)
         text = tomllib.loads(pathlib.Path(path).read_text())
         max_depth = text.get("render", {}).get("max_depth", 8)
         scene, samples = mitsuba_scene(path, args.spp, max_depth)
