@@ -113,9 +113,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> OptResult<()> {
         path: path.to_owned(),
         message: e.to_string(),
     };
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(err)?;
-    }
+    epsm_render::atomic_file::create_parent(path).map_err(err)?;
     epsm_render::atomic_file::write_atomic(path, err, |out| {
         std::io::Write::write_all(out, bytes).map_err(err)
     })

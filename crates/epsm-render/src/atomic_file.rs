@@ -44,6 +44,16 @@ pub fn write_atomic<E>(
     Ok(())
 }
 
+/// Creates the folder `path` lies in, with its parents, unless `path` has
+/// none (a bare file name) or it exists. For writers that may create their
+/// output folder; [`write_atomic`] does not.
+pub fn create_parent(path: &Path) -> std::io::Result<()> {
+    match path.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() => std::fs::create_dir_all(dir),
+        _ => Ok(()),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

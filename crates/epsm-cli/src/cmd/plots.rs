@@ -123,9 +123,8 @@ fn tick(v: f64) -> String {
 
 /// Writes an 8-bit RGB buffer as PNG atomically, creating the folder.
 pub fn write_png(path: &Path, w: u32, h: u32, rgb: &[u8]) -> anyhow::Result<()> {
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    }
+    epsm_render::atomic_file::create_parent(path)
+        .with_context(|| format!("creating the folder of {}", path.display()))?;
     let rgb8 = image::ExtendedColorType::Rgb8;
     Ok(epsm_render::image_io::write_png_bytes(
         path, w, h, rgb8, rgb,
