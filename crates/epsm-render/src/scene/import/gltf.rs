@@ -198,7 +198,8 @@ pub(crate) fn walk<'a>(doc: &'a gltf::Document, file: &Path) -> Result<Vec<Place
         }
         // glTF rotations are unit quaternions (glTF 2.0 §5.25); gltf's matrix
         // of any other would be a silent identity or a scaled rotation.
-        if let gltf::scene::Transform::Decomposed { rotation, .. } = node.transform() {
+        let transform = node.transform();
+        if let gltf::scene::Transform::Decomposed { rotation, .. } = &transform {
             let norm = rotation
                 .map(f64::from)
                 .iter()
@@ -213,7 +214,7 @@ pub(crate) fn walk<'a>(doc: &'a gltf::Document, file: &Path) -> Result<Vec<Place
                 return Err(fail(format!("{field}.rotation"), &msg));
             }
         }
-        let local = DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)));
+        let local = DMat4::from_cols_array_2d(&transform.matrix().map(|c| c.map(f64::from)));
         let world = parent * local;
         if !world.is_finite() || world.determinant() == 0.0 {
             return Err(fail(field, "non-finite or singular transform"));
