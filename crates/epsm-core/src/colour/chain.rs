@@ -146,15 +146,10 @@ fn eta_of(lobe: Lobe, eta: f32, cos: f64, material: &Material) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use epsm_render::materials::dielectric::Dielectric;
 
     #[test]
     fn a_refraction_weight_reaching_total_internal_reflection_is_dropped() {
-        let glass = Material {
-            name: "glass".into(),
-            bsdf: Bsdf::Dielectric(Dielectric { ior: 1.5 }),
-            two_sided: true,
-        };
+        let glass = super::super::glass();
         let lobe = Lobe::SpecularTransmission;
         let eta = 1.0 / 1.5;
         // From inside: the critical cosine is √(1 − η²) ≈ 0.7454.

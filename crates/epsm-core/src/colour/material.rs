@@ -121,12 +121,7 @@ mod tests {
 
     #[test]
     fn an_ior_difference_reaching_total_internal_reflection_is_dropped() {
-        use epsm_render::materials::dielectric::Dielectric;
-        let glass = Material {
-            name: "glass".into(),
-            bsdf: Bsdf::Dielectric(Dielectric { ior: 1.5 }),
-            two_sided: true,
-        };
+        let glass = super::super::glass();
         let probe = Probe::new(0, &glass, Target::Ior { material: 0 }, 1.5);
         let lobe = Lobe::SpecularTransmission;
         // From inside, just past the critical cosine of ior 1.5 (0.745356)

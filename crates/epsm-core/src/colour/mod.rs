@@ -211,3 +211,14 @@ impl ColourModel {
         }
     }
 }
+
+/// A two-sided glass of IOR 1.5, for the submodules' tests.
+#[cfg(test)]
+fn glass() -> epsm_render::materials::Material {
+    use epsm_render::materials::{Bsdf, Material, dielectric::Dielectric};
+    Material {
+        name: "glass".into(),
+        bsdf: Bsdf::Dielectric(Dielectric { ior: 1.5 }),
+        two_sided: true,
+    }
+}
