@@ -8,9 +8,9 @@
 //! The format is chosen by the (case-insensitive) extension; anything else is
 //! an error. A read image has at most [`MAX_IMAGE_PIXELS`] pixels: an EXR
 //! declaring more is rejected from its header, before anything is allocated
-//! (PNG decoding has the `image` crate's memory limit). Writes are atomic: the image goes to a temporary file in the
-//! target's directory which is then renamed over the target, so a reader
-//! never sees a half-written file and a failed write leaves nothing behind.
+//! (PNG decoding has the `image` crate's memory limit). Writes are atomic
+//! ([`crate::atomic_file`]): a reader never sees a half-written file and a
+//! failed write leaves nothing behind.
 //! sRGB transfer functions follow IEC 61966-2-1.
 
 use std::io::Write;
