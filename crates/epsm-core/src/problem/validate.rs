@@ -4,9 +4,8 @@
 use std::path::Path;
 
 use epsm_ot::MIN_BLUR;
-use epsm_render::error::shown;
-use epsm_render::scene::load::{Locator, load_parts, parts_from_desc};
-use epsm_render::{Error, Scene, SceneError};
+use epsm_render::Scene;
+use epsm_render::scene::load::{Ctx, Locator, load_parts, parts_from_desc};
 
 use super::desc::ProblemDesc;
 use super::{LossSettings, OptimizerSettings, ParamSpec, Passes, Problem, Target};
@@ -15,57 +14,11 @@ use crate::params::ParamTable;
 use crate::run::OptResult;
 use crate::schedule::Method;
 
-struct Ctx<'a> {
-    file: &'a Path,
-    locator: &'a Locator,
-}
-
-impl Ctx<'_> {
-    fn err(&self, field: &str, message: impl Into<String>) -> Error {
-        let mut e = SceneError::new(self.file, field, message);
-        e.line = self.locator.line(field);
-        e.into()
-    }
-
-    fn finite(&self, field: &str, v: f64) -> Result<f64, Error> {
-        if v.is_finite() {
-            Ok(v)
-        } else {
-            Err(self.err(
-                field,
-                format!("expected a finite number, found {}", shown(v)),
-            ))
-        }
-    }
-
-    /// `v` in the open-or-closed range described by `ok`, named by `what`.
-    fn check(&self, field: &str, v: f64, ok: bool, what: &str) -> Result<f64, Error> {
-        let v = self.finite(field, v)?;
-        if ok {
-            Ok(v)
-        } else {
-            Err(self.err(field, format!("expected {what}, found {}", shown(v))))
-        }
-    }
-
-    fn count(&self, field: &str, v: u32, lo: u32, hi: u32) -> Result<u32, Error> {
-        if (lo..=hi).contains(&v) {
-            Ok(v)
-        } else {
-            Err(self.err(
-                field,
-                format!("expected an integer in [{lo}, {hi}], found {v}"),
-            ))
-        }
-    }
-}
-
 /// Builds the problem of `d`.
 pub(super) fn problem(d: &ProblemDesc, file: &Path, locator: &Locator) -> OptResult<Problem> {
-    let c = Ctx { file, locator };
-    let base = file.parent().unwrap_or(Path::new(""));
+    let c = Ctx::new(file, locator, "");
     let scene = match (&d.scene_file, &d.scene) {
-        (Some(path), None) => load_parts(&base.join(path))
+        (Some(path), None) => load_parts(&c.resolve(path))
             .map_err(|e| c.err("scene_file", format!("cannot load `{path}`: {e}")))?,
         (None, Some(desc)) => parts_from_desc(desc, file, locator, "scene")?,
         _ => {
@@ -147,7 +100,7 @@ pub(super) fn problem(d: &ProblemDesc, file: &Path, locator: &Locator) -> OptRes
     }
     let target = match &d.target.image {
         Some(path) => {
-            let path = base.join(path);
+            let path = c.resolve(path);
             let img = epsm_render::image_io::read_image(&path)
                 .and_then(|img| {
                     epsm_render::image_io::check_values(&path, &img, f32::INFINITY)?;
@@ -233,12 +186,7 @@ pub(super) fn problem(d: &ProblemDesc, file: &Path, locator: &Locator) -> OptRes
         target,
         loss: LossSettings {
             kind,
-            lambda: c.check(
-                "loss.lambda",
-                l.lambda,
-                l.lambda > 0.0 && l.lambda <= f64::from(f32::MAX),
-                "a positive number of at most 3.4e38",
-            )?,
+            lambda: c.check("loss.lambda", l.lambda, l.lambda > 0.0, "a positive number")?,
             match_resolution: [mw, mh],
             flow: l.flow,
         },

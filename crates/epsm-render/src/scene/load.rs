@@ -34,7 +34,7 @@ use std::path::Path;
 use serde::de::DeserializeOwned;
 
 pub use build::MAX_DEPTH;
-pub use check::MIN_ALPHA;
+pub use check::{Ctx, MIN_ALPHA};
 pub use locate::Locator;
 
 use crate::error::{Error, Result, SceneError};
@@ -127,11 +127,5 @@ pub fn parts_from_desc(
     locator: &Locator,
     prefix: &str,
 ) -> Result<SceneParts> {
-    let ctx = check::Ctx {
-        file,
-        base: file.parent().unwrap_or(Path::new("")).to_owned(),
-        locator,
-        prefix,
-    };
-    build::parts(desc, &ctx)
+    build::parts(desc, &check::Ctx::new(file, locator, prefix))
 }

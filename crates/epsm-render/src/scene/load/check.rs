@@ -26,7 +26,18 @@ pub struct Ctx<'a> {
     pub prefix: &'a str,
 }
 
-impl Ctx<'_> {
+impl<'a> Ctx<'a> {
+    /// The context of `file` (relative paths resolve against its directory),
+    /// with its fields under the dotted `prefix` (`""` for a whole file).
+    pub fn new(file: &'a Path, locator: &'a Locator, prefix: &'a str) -> Self {
+        Self {
+            file,
+            base: file.parent().unwrap_or(Path::new("")).to_owned(),
+            locator,
+            prefix,
+        }
+    }
+
     /// The full dotted path of `field`.
     fn path(&self, field: &str) -> String {
         if self.prefix.is_empty() {
@@ -74,14 +85,20 @@ impl Ctx<'_> {
         }
     }
 
-    /// A number in `[lo, hi]`; `what` names the range in the message.
-    pub fn within(&self, field: &str, v: f64, lo: f64, hi: f64, what: &str) -> Result<f64, Error> {
+    /// A finite number for which `ok` (the caller's range test of it) holds;
+    /// `what` names the range in the message.
+    pub fn check(&self, field: &str, v: f64, ok: bool, what: &str) -> Result<f64, Error> {
         let v = self.finite(field, v)?;
-        if (lo..=hi).contains(&v) {
+        if ok {
             Ok(v)
         } else {
             Err(self.err(field, format!("expected {what}, found {}", shown(v))))
         }
+    }
+
+    /// A number in `[lo, hi]`; `what` names the range in the message.
+    pub fn within(&self, field: &str, v: f64, lo: f64, hi: f64, what: &str) -> Result<f64, Error> {
+        self.check(field, v, (lo..=hi).contains(&v), what)
     }
 
     /// A vector of finite numbers.
@@ -113,11 +130,7 @@ impl Ctx<'_> {
 
     /// A (relative) index of refraction, finite and `> 0`.
     pub fn ior(&self, field: &str, v: f64) -> Result<f32, Error> {
-        let v = self.finite(field, v)?;
-        if v <= 0.0 {
-            return Err(self.err(field, format!("expected a value > 0, found {}", shown(v))));
-        }
-        Ok(v as f32)
+        Ok(self.check(field, v, v > 0.0, "a value > 0")? as f32)
     }
 
     /// A count in `[lo, hi]`.

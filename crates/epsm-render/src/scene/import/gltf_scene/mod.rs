@@ -62,12 +62,7 @@ pub fn load(path: &Path) -> Result<Loaded> {
 pub fn from_slice(bytes: &[u8], file: &Path) -> Result<Loaded> {
     let gltf = open(bytes, file)?;
     let locator = Locator::default();
-    let ctx = Ctx {
-        file,
-        base: file.parent().unwrap_or(Path::new("")).to_owned(),
-        locator: &locator,
-        prefix: "",
-    };
+    let ctx = Ctx::new(file, &locator, "");
     let placed = walk(&gltf.doc, file)?;
     let mut importer = Importer {
         ctx: &ctx,

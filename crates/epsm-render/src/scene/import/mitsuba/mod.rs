@@ -59,12 +59,7 @@ pub fn load(path: &Path) -> Result<Loaded> {
 /// errors and its directory resolves mesh and image files.
 pub fn from_str(text: &str, file: &Path) -> Result<Loaded> {
     let doc = parse::parse(text, file)?;
-    let ctx = Ctx {
-        file,
-        base: file.parent().unwrap_or(Path::new("")).to_owned(),
-        locator: &doc.locator,
-        prefix: "",
-    };
+    let ctx = Ctx::new(file, &doc.locator, "");
     let root = &doc.root;
     let mut warnings = Vec::new();
     let sensors: Vec<&Element> = root.tagged("sensor").collect();
