@@ -101,10 +101,10 @@ fn r_perp(v: DVec3, e1: DVec3, e2: DVec3) -> DVec2 {
 /// `∂ ln w/∂θ` of a delta lobe's weight with `cos θi` changing at rate
 /// `dcos` (`cos` signed: negative from inside a dielectric), from the
 /// analytic `∂F/∂cos` in `f64`. Fails with
-/// [`DropReason::TotalInternalReflection`] when the weight vanishes or the
-/// critical cosine lies within `1e-3·max(|cos|, 1e-2)` of `|cos|`: the rate
-/// grows as `1/(|cos| − cos_c)` there, so a first-order step describes the
-/// weight only over changes of `cos` smaller than that distance.
+/// [`DropReason::TotalInternalReflection`] when the weight vanishes or
+/// `cos` is [`near_critical`]: the rate grows as `1/(|cos| − cos_c)`
+/// there, so a first-order step describes the weight only over changes of
+/// `cos` smaller than that distance.
 pub(super) fn weight_rate(
     material: &Material,
     lobe: Lobe,
@@ -116,8 +116,7 @@ pub(super) fn weight_rate(
         return Ok(0.0);
     };
     let eta = f64::from(eta_of(lobe, eta, cos, material));
-    let critical = (1.0 - eta * eta).max(0.0).sqrt();
-    if eta < 1.0 && (cos.abs() - critical).abs() <= 1e-3 * cos.abs().max(1e-2) {
+    if near_critical(eta, cos) {
         return Err(DropReason::TotalInternalReflection);
     }
     let FresnelRates { f, d_cos, .. } = fresnel_dielectric_rates(cos.abs().min(1.0), eta);
@@ -130,6 +129,15 @@ pub(super) fn weight_rate(
         return Err(DropReason::TotalInternalReflection);
     }
     Ok(dw / w * cos.signum() * dcos)
+}
+
+/// Whether `|cos|` lies within `1e-3·max(|cos|, 1e-2)` of the critical
+/// cosine `√(1 − η²)` of a relative IOR `eta < 1`, where the Fresnel
+/// term's rates grow without bound and a first-order step is trusted only
+/// over a smaller change.
+pub(super) fn near_critical(eta: f64, cos: f64) -> bool {
+    let critical = (1.0 - eta * eta).max(0.0).sqrt();
+    eta < 1.0 && (cos.abs() - critical).abs() <= 1e-3 * cos.abs().max(1e-2)
 }
 
 /// The relative IOR `η(transmitted side)/η(wi side)` the Fresnel term uses.
@@ -168,9 +176,7 @@ mod tests {
             .abs()
             .min(1.0 - cos.abs())
             .min((cos.abs() - critical).abs());
-        let central = |h: f64| (ln_w(cos + h) - ln_w(cos - h)) / (2.0 * h);
-        let h = 1e-2 * room;
-        (4.0 * central(0.5 * h) - central(h)) / 3.0
+        super::super::richardson(ln_w, cos, 1e-2 * room)
     }
 
     #[test]
