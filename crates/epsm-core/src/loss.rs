@@ -66,8 +66,17 @@ pub struct LossEval {
     pub matched: Option<Vec<Vec2>>,
 }
 
-/// The tone map of the OT points, `c / (1 + c)` clamped to `[0, 1]`.
+/// The tone map of the OT points, `c / (1 + c)` clamped to `[0, 1]`
+/// (negative colours map to 0).
+///
+/// A non-finite colour (NaN, ±∞) is not a colour: it maps to NaN, which
+/// [`PointCloud`] construction rejects, so [`points`] and [`evaluate`] fail
+/// with [`epsm_ot::OtError::NonFinite`] naming the pixel instead of matching
+/// it as black.
 pub fn tone_map(c: f32) -> f32 {
+    if !c.is_finite() {
+        return f32::NAN;
+    }
     (c.max(0.0) / (1.0 + c.max(0.0))).clamp(0.0, 1.0)
 }
 
@@ -322,6 +331,33 @@ mod tests {
             "flow {flow_sum} vs fd {fd}"
         );
         assert!(add_flow(&Image::new(3, 3), &mut e).is_err());
+    }
+
+    #[test]
+    fn a_non_finite_pixel_fails_the_ot_loss_instead_of_matching_as_black() {
+        for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+            assert!(tone_map(bad).is_nan(), "{bad}");
+            let mut img = dot(4, 4, (1, 1));
+            img.set(2, 3, Vec3::new(0.5, bad, 0.5));
+            for (image, target) in [(&img, &dot(4, 4, (2, 2))), (&dot(4, 4, (2, 2)), &img)] {
+                let e = evaluate(LossKind::OtExact, image, target, 1.0);
+                assert!(
+                    matches!(
+                        e,
+                        Err(OptimizeError::Ot(epsm_ot::OtError::NonFinite {
+                            index: 14,
+                            axis: "g",
+                            ..
+                        }))
+                    ),
+                    "{bad}: {e:?}"
+                );
+            }
+        }
+        assert_eq!(
+            (tone_map(-1.0), tone_map(1.0), tone_map(f32::MAX)),
+            (0.0, 0.5, 1.0)
+        );
     }
 
     #[test]

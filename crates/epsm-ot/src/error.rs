@@ -2,7 +2,8 @@
 //!
 //! Every public solver entry point validates its input and returns an
 //! [`OtError`] instead of panicking: empty clouds, clouds of different sizes,
-//! ragged coordinate columns, non-finite coordinates and invalid settings.
+//! ragged coordinate columns, non-finite coordinates, invalid settings, and
+//! clouds the entropic kernel cannot represent.
 
 use thiserror::Error;
 
@@ -49,5 +50,27 @@ pub enum OtError {
         value: f64,
         /// The accepted range.
         reason: &'static str,
+    },
+    /// The clouds are too spread for the entropic kernel at this blur: its
+    /// `f32` scores, up to a small multiple of `diameter_sq / ε`, would
+    /// overflow.
+    #[error(
+        "the clouds' squared diameter {diameter_sq:e} over ε = blur² = {eps:e} exceeds {limit:e}, \
+         beyond the entropic kernel's f32 range: rescale the points or raise `sinkhorn.blur`"
+    )]
+    SpreadTooLarge {
+        /// Squared diameter of the two clouds together.
+        diameter_sq: f64,
+        /// The final ε, `blur²`.
+        eps: f64,
+        /// The largest accepted `diameter_sq / ε`.
+        limit: f64,
+    },
+    /// A source point's row of the entropic plan has no mass (no target
+    /// streamed, or no finite kernel score), so its barycentre is undefined.
+    #[error("a source point's row of the entropic plan has no finite mass at ε = {eps:e}")]
+    EmptyKernelRow {
+        /// The ε of the plan.
+        eps: f64,
     },
 }

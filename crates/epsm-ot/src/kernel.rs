@@ -71,12 +71,23 @@ impl RowSum {
         f64::from(self.max) + self.sum.ln()
     }
 
-    /// The weighted mean target `Σ w_j y_j / Σ w_j` and mean cost (valid after a `moments` pass).
-    pub(crate) fn barycentre(&self) -> (Point, f64) {
-        (
+    /// The weighted mean target `Σ w_j y_j / Σ w_j` and mean cost (valid after a `moments` pass),
+    /// or `None` when the row has no usable mass.
+    ///
+    /// Whenever a block with a finite score is pushed, its largest score is (or becomes) the
+    /// running maximum and adds `exp(0) = 1` to a sum of non-negative terms, so a row with any
+    /// finite score has `sum ≥ 1`. `None` is thus the row that streamed no target, or whose
+    /// scores were all `−∞` (a zero weight, or a cost beyond `f32` range at this ε) or `NaN`
+    /// (non-finite potentials): the row's barycentre is undefined and the caller fails with a
+    /// typed error instead of dividing by 0.
+    pub(crate) fn barycentre(&self) -> Option<(Point, f64)> {
+        if self.sum.is_nan() || self.sum < 1.0 {
+            return None;
+        }
+        Some((
             std::array::from_fn(|d| (self.moments[d] / self.sum) as f32),
             self.moments[DIM] / self.sum,
-        )
+        ))
     }
 
     fn rescale_to(&mut self, new_max: f32) {
@@ -545,7 +556,10 @@ mod tests {
                 (la - lb).abs() <= 1e-6 * lb.abs().max(1.0),
                 "case {case}: {la} vs {lb}"
             );
-            let ((ta, ca), (tb, cb)) = (a.barycentre(), b.barycentre());
+            let ((ta, ca), (tb, cb)) = match (a.barycentre(), b.barycentre()) {
+                (Some(a), Some(b)) => (a, b),
+                other => panic!("case {case}: a row of finite scores has no mass: {other:?}"),
+            };
             for d in 0..DIM {
                 assert!((ta[d] - tb[d]).abs() <= 1e-6, "case {case}: barycentre {d}");
             }
@@ -581,6 +595,43 @@ mod tests {
             .map(|j| (scores[j] - m).exp() * f64::from(y[0][j]))
             .sum::<f64>()
             / s;
-        assert!((f64::from(acc.barycentre().0[0]) - bary0).abs() < 1e-5);
+        let bary = acc.barycentre().map(|(t, _)| f64::from(t[0]));
+        assert!(bary.is_some_and(|b| (b - bary0).abs() < 1e-5), "{bary:?}");
+    }
+
+    #[test]
+    fn a_row_without_a_finite_score_has_no_barycentre() {
+        // The row's largest score weighs exactly 1: a row with mass has sum ≥ 1.
+        assert_eq!(exp_nonpositive(0.0), 1.0);
+        let n = 40;
+        let y: [Vec<f32>; DIM] = std::array::from_fn(|d| (0..n).map(|j| (j + d) as f32).collect());
+        let g = vec![0.0f32; n];
+        let x = [0.5; DIM];
+        let row = |lw: &[f32], inv_eps: f32, ranges: &[Range<usize>]| {
+            let mut acc = RowSum::new();
+            stream_row::<true>(&x, &y, lw, &g, inv_eps, ranges, &mut acc);
+            acc.barycentre()
+        };
+        let uniform = vec![-(n as f32).ln(); n];
+        let all = [0..n / 2, n / 2..n];
+        // Nothing streamed.
+        assert_eq!(row(&uniform, 1.0, &[]), None);
+        assert_eq!(row(&uniform, 1.0, &[3..3, 5..5]), None);
+        // Zero weights: every score is −∞.
+        assert_eq!(row(&vec![f32::NEG_INFINITY; n], 1.0, &all), None);
+        // Costs over ε beyond f32 range: every score is −∞.
+        assert_eq!(row(&uniform, f32::MAX, &all), None);
+        // The same row with one finite score left is a point mass on it.
+        let mut one = vec![f32::NEG_INFINITY; n];
+        one[7] = 0.0;
+        let (t, c) = row(&one, 1.0, &all).expect("one finite score");
+        assert_eq!(t, std::array::from_fn(|d| y[d][7]));
+        assert!(
+            (c - (0..DIM)
+                .map(|d| f64::from(x[d] - y[d][7]).powi(2))
+                .sum::<f64>())
+            .abs()
+                < 1e-9
+        );
     }
 }

@@ -66,7 +66,7 @@ pub use error::OtError;
 pub use exact::ExactSettings;
 pub use plan::{EntropicPlan, Matching, OtResult, PhaseTimes, SlicedPlan, SolveStats};
 pub use points::{DIM, Point, PointCloud};
-pub use sinkhorn::{MIN_BLUR, SinkhornSettings};
+pub use sinkhorn::{MAX_SPREAD, MIN_BLUR, SinkhornSettings};
 pub use sliced::SlicedSettings;
 
 /// Which solver to use, with its settings: one interface for all of them.

@@ -60,6 +60,15 @@ pub(crate) use dual::{Dual, polish, solve_dual};
 /// and still running after 20 s).
 pub const MIN_BLUR: f64 = 1e-4;
 
+/// The largest accepted `diameter² / ε` of a solve ([`OtError::SpreadTooLarge`]).
+///
+/// The kernel's `f32` scores `log w_j + (g_j − c_ij)/ε` scale with it; the
+/// bound is 8 times below `f32::MAX`, a margin for centred potentials and
+/// their differences exceeding one squared diameter. Without it, clouds
+/// 1e17 apart at the smallest blur (a ratio of 1e42) gave non-finite
+/// potentials and a NaN loss and gradient.
+pub const MAX_SPREAD: f64 = f32::MAX as f64 / 8.0;
+
 /// Settings of the entropic solver, with named presets.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SinkhornSettings {
@@ -237,7 +246,12 @@ struct Solved {
     pairs: u64,
 }
 
-fn solve_one(x: &Clustered, y: &Clustered, diam2: f64, settings: &SinkhornSettings) -> Solved {
+fn solve_one(
+    x: &Clustered,
+    y: &Clustered,
+    diam2: f64,
+    settings: &SinkhornSettings,
+) -> Result<Solved, OtError> {
     let mut dual = if settings.exact_prices {
         // Start the final-ε iterations from the optimal assignment's dual potentials.
         let ex = crate::exact::solve_sorted(x, y, diam2, &crate::ExactSettings::default());
@@ -250,25 +264,27 @@ fn solve_one(x: &Clustered, y: &Clustered, diam2: f64, settings: &SinkhornSettin
         solve_dual(x, y, diam2, settings)
     };
     let start = std::time::Instant::now();
-    let (barycentres, costs, bary_pairs) =
-        pass::barycentres(x, y, &dual, settings.truncation * dual.eps);
+    let bary = pass::barycentres(x, y, &dual, settings.truncation * dual.eps)?;
     dual.phases
         .add("barycentres", start.elapsed().as_secs_f64());
     let n = x.cloud.len() as f64;
     let mean = |v: &[f64]| v.iter().sum::<f64>() / n;
     let value = mean(&dual.f) + mean(&dual.g);
-    let transport_cost = costs.iter().sum::<f64>() / n;
-    let pairs = dual.pairs + bary_pairs;
-    Solved {
+    let transport_cost = bary.costs.iter().sum::<f64>() / n;
+    let pairs = dual.pairs + bary.pairs;
+    Ok(Solved {
         dual,
-        barycentres,
+        barycentres: bary.points,
         value,
         transport_cost,
         pairs,
-    }
+    })
 }
 
 /// Solves the entropic problem from `source` to `target`.
+///
+/// Fails with [`OtError::SpreadTooLarge`] when the clouds' squared diameter
+/// over `blur²` exceeds [`MAX_SPREAD`].
 pub fn solve(
     source: &PointCloud,
     target: &PointCloud,
@@ -276,6 +292,15 @@ pub fn solve(
 ) -> Result<OtResult, OtError> {
     settings.validate()?;
     check_pair(source, target)?;
+    let diam2 = diameter_sq(source, target);
+    let eps = settings.blur * settings.blur;
+    if diam2 / eps > MAX_SPREAD {
+        return Err(OtError::SpreadTooLarge {
+            diameter_sq: diam2,
+            eps,
+            limit: MAX_SPREAD,
+        });
+    }
     let mut phases = PhaseTimes::default();
     let (x, y) = phases.time("cluster", || {
         (
@@ -283,8 +308,7 @@ pub fn solve(
             Clustered::new(target, settings.cluster_size),
         )
     });
-    let diam2 = diameter_sq(source, target);
-    let xy = solve_one(&x, &y, diam2, settings);
+    let xy = solve_one(&x, &y, diam2, settings)?;
     phases.merge(&xy.dual.phases);
     let bary = x.unsort(&xy.barycentres);
     let mut stats = SolveStats {
@@ -296,8 +320,8 @@ pub fn solve(
         ..SolveStats::default()
     };
     let (loss, pull) = if settings.debias {
-        let xx = solve_one(&x, &x, diameter_sq(source, source), settings);
-        let yy = solve_one(&y, &y, diameter_sq(target, target), settings);
+        let xx = solve_one(&x, &x, diameter_sq(source, source), settings)?;
+        let yy = solve_one(&y, &y, diameter_sq(target, target), settings)?;
         stats.iterations += xx.dual.iterations + yy.dual.iterations;
         stats.pair_evaluations += xx.pairs + yy.pairs;
         stats.bridged_corrections +=

@@ -13,7 +13,7 @@
 //! `(1 − F)/η²` for a dielectric and the constant tint for a conductor.
 
 use epsm_render::frame::basis_f64;
-use epsm_render::materials::fresnel::fresnel_dielectric;
+use epsm_render::materials::fresnel::{FresnelRates, fresnel_dielectric_rates};
 use epsm_render::materials::{Bsdf, Lobe, Material};
 use glam::{DVec2, DVec3};
 use nalgebra::{RealField, Vector3};
@@ -99,10 +99,12 @@ fn r_perp(v: DVec3, e1: DVec3, e2: DVec3) -> DVec2 {
 }
 
 /// `∂ ln w/∂θ` of a delta lobe's weight with `cos θi` changing at rate
-/// `dcos` (`cos` signed: negative from inside a dielectric). Fails with
-/// [`DropReason::TotalInternalReflection`] when the weight vanishes within
-/// the difference step (a refraction at the critical angle), where `ln w`
-/// has no derivative to take.
+/// `dcos` (`cos` signed: negative from inside a dielectric), from the
+/// analytic `∂F/∂cos` in `f64`. Fails with
+/// [`DropReason::TotalInternalReflection`] when the weight vanishes or
+/// `cos` is [`near_critical`]: the rate grows as `1/(|cos| − cos_c)`
+/// there, so a first-order step describes the weight only over changes of
+/// `cos` smaller than that distance.
 pub(super) fn weight_rate(
     material: &Material,
     lobe: Lobe,
@@ -113,19 +115,29 @@ pub(super) fn weight_rate(
     let Bsdf::Dielectric(_) = material.bsdf else {
         return Ok(0.0);
     };
-    let w = |c: f64| {
-        let f = f64::from(fresnel_dielectric(
-            c.abs() as f32,
-            eta_of(lobe, eta, cos, material),
-        ));
-        if lobe.is_transmission() { 1.0 - f } else { f }
-    };
-    let h = 1e-3 * cos.abs().max(1e-2);
-    let (p, m) = (w(cos + h), w(cos - h));
-    if p <= 0.0 || m <= 0.0 {
+    let eta = f64::from(eta_of(lobe, eta, cos, material));
+    if near_critical(eta, cos) {
         return Err(DropReason::TotalInternalReflection);
     }
-    Ok((p.ln() - m.ln()) / (2.0 * h) * dcos)
+    let FresnelRates { f, d_cos, .. } = fresnel_dielectric_rates(cos.abs().min(1.0), eta);
+    let (w, dw) = if lobe.is_transmission() {
+        (1.0 - f, -d_cos)
+    } else {
+        (f, d_cos)
+    };
+    if w <= 0.0 {
+        return Err(DropReason::TotalInternalReflection);
+    }
+    Ok(dw / w * cos.signum() * dcos)
+}
+
+/// Whether `|cos|` lies within `1e-3·max(|cos|, 1e-2)` of the critical
+/// cosine `√(1 − η²)` of a relative IOR `eta < 1`, where the Fresnel
+/// term's rates grow without bound and a first-order step is trusted only
+/// over a smaller change.
+pub(super) fn near_critical(eta: f64, cos: f64) -> bool {
+    let critical = (1.0 - eta * eta).max(0.0).sqrt();
+    eta < 1.0 && (cos.abs() - critical).abs() <= 1e-3 * cos.abs().max(1e-2)
 }
 
 /// The relative IOR `η(transmitted side)/η(wi side)` the Fresnel term uses.
@@ -146,6 +158,60 @@ fn eta_of(lobe: Lobe, eta: f32, cos: f64, material: &Material) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use epsm_render::materials::fresnel::fresnel_dielectric;
+
+    /// `∂ ln w/∂cos` by Richardson-extrapolated central differences of the
+    /// `f64` Fresnel term, with a step 1e-2 of the distance from `cos` to
+    /// the nearest point where `w` is not smooth (`|cos|` = 0 or 1, the
+    /// critical cosine): truncation error ~1e-8 of the rate, rounding error
+    /// ~1e-16 of `ln w` over the step.
+    fn reference_rate(material: &Material, lobe: Lobe, eta: f32, cos: f64) -> f64 {
+        let eta = f64::from(eta_of(lobe, eta, cos, material));
+        let ln_w = |c: f64| {
+            let f = fresnel_dielectric(c.abs(), eta);
+            if lobe.is_transmission() { 1.0 - f } else { f }.ln()
+        };
+        let critical = (1.0 - eta * eta).max(0.0).sqrt();
+        let room = cos
+            .abs()
+            .min(1.0 - cos.abs())
+            .min((cos.abs() - critical).abs());
+        super::super::richardson(ln_w, cos, 1e-2 * room)
+    }
+
+    #[test]
+    fn the_weight_rate_matches_an_f64_reference_at_grazing_critical_and_normal_incidence() {
+        let glass = super::super::glass();
+        let (reflect, transmit) = (Lobe::SpecularReflection, Lobe::SpecularTransmission);
+        // (lobe, recorded η, signed cos): entering at grazing incidence,
+        // leaving near the critical cosine √(1 − 1/1.5²) ≈ 0.7454 (outside
+        // total internal reflection), and near normal incidence both ways.
+        let cases = [
+            (transmit, 1.5, 1e-3),
+            (reflect, 1.0, 1e-3),
+            (transmit, 1.5, 1e-2),
+            (reflect, 1.0, 1e-2),
+            (transmit, 1.0 / 1.5, -0.75),
+            (reflect, 1.0, -0.75),
+            (transmit, 1.0 / 1.5, -0.76),
+            (reflect, 1.0, -0.76),
+            (transmit, 1.5, 0.9995),
+            (reflect, 1.0, 0.9995),
+            (transmit, 1.0 / 1.5, -0.9995),
+            (reflect, 1.0, -0.9995),
+        ];
+        let mut worst = 0.0f64;
+        let mut table = String::new();
+        for (lobe, eta, cos) in cases {
+            let rate = weight_rate(&glass, lobe, eta, cos, 1.0).expect("not near TIR");
+            let reference = reference_rate(&glass, lobe, eta, cos);
+            let error = ((rate - reference) / reference).abs();
+            worst = worst.max(error);
+            table +=
+                &format!("\n{lobe:?} cos {cos}: {rate} vs {reference}, relative error {error:.2e}");
+        }
+        assert!(worst < 1e-6, "worst relative error {worst:.2e}:{table}");
+    }
 
     #[test]
     fn a_refraction_weight_reaching_total_internal_reflection_is_dropped() {

@@ -1,20 +1,22 @@
 //! Colour derivatives for material values at fixed sampled directions:
-//! each parameter's material is evaluated at `θ ± h` ([`Probe`]) and the
+//! each parameter's material is evaluated at `θ ± h` ([`Probe`]; a
+//! dielectric's IOR uses the analytic Fresnel derivative instead) and the
 //! path's terms after a vertex of that material scale by `∂ ln f/∂θ`.
 //!
 //! | parameter | factor | derivative |
 //! |---|---|---|
 //! | `albedo.r/g/b` (diffuse) | `f·|cos|` | central difference (exact: linear) |
 //! | `alpha` (rough conductor) | `f·|cos|` | central difference, `h = 1e-3·max(α, 1e-3)` |
-//! | `ior` (dielectric) | the lobe's weight over its fixed choice probability: `F` (reflection), `(1 − F)/η²` (refraction) | central difference, `h = 1e-4·ior` |
+//! | `ior` (dielectric) | the lobe's weight over its fixed choice probability: `F` (reflection), `(1 − F)/η²` (refraction) | analytic `∂F/∂η` in `f64` |
 //!
 //! The refracted direction's change with `ior` moves the chain: that is a
 //! position effect, differentiated through `dp/dθ`.
 
-use epsm_render::materials::fresnel::fresnel_dielectric;
+use epsm_render::materials::fresnel::{FresnelRates, fresnel_dielectric_rates};
 use epsm_render::materials::{Bsdf, Lobe, Material, Texture};
 use glam::{Vec2, Vec3};
 
+use super::chain::near_critical;
 use crate::drops::DropReason;
 use crate::params::Target;
 
@@ -26,6 +28,8 @@ pub(super) struct Probe {
     width: f32,
     plus: Material,
     minus: Material,
+    /// The IOR at θ when the parameter is this dielectric's IOR.
+    ior: Option<f64>,
 }
 
 /// `material` with the value of `target` set to `value` (unchanged when the
@@ -54,11 +58,16 @@ impl Probe {
             _ => 1e-3,
         };
         let lo = (v - h).max(0.0);
+        let ior = match (&material.bsdf, target) {
+            (Bsdf::Dielectric(_), Target::Ior { .. }) => Some(f64::from(v)),
+            _ => None,
+        };
         Self {
             param,
             width: v + h - lo,
             plus: with_value(material, target, v + h),
             minus: with_value(material, target, lo),
+            ior,
         }
     }
 
@@ -73,28 +82,34 @@ impl Probe {
         )
     }
 
-    /// `∂ ln w/∂θ` of a delta lobe's weight `w` for local `wi`. Fails with
-    /// [`DropReason::TotalInternalReflection`] when the weight vanishes on
-    /// one side of the difference only (a refraction at the critical angle
-    /// of `ior ± h`).
+    /// `∂ ln w/∂θ` of a delta lobe's weight `w` for local `wi`, from the
+    /// analytic `∂F/∂η` in `f64` (0 unless θ is this dielectric's IOR).
+    /// Fails with [`DropReason::TotalInternalReflection`] when the weight
+    /// vanishes or `wi` is [`near_critical`].
     pub(super) fn delta_ratio(&self, wi: Vec3, lobe: Lobe) -> Result<Vec3, DropReason> {
-        let w = |m: &Material| match &m.bsdf {
-            Bsdf::Dielectric(d) => {
-                let eta = if wi.z >= 0.0 { d.ior } else { 1.0 / d.ior };
-                let f = fresnel_dielectric(wi.z.abs(), eta);
-                Vec3::splat(if lobe.is_transmission() {
-                    (1.0 - f) / (eta * eta)
-                } else {
-                    f
-                })
-            }
-            _ => Vec3::ZERO,
+        let Some(ior) = self.ior else {
+            return Ok(Vec3::ZERO);
         };
-        let (p, m) = (w(&self.plus), w(&self.minus));
-        if p.cmpgt(Vec3::ZERO) != m.cmpgt(Vec3::ZERO) {
+        let cos = f64::from(wi.z);
+        // η(wo side)/η(wi side) and its rate with the IOR.
+        let (eta, deta) = if cos >= 0.0 {
+            (ior, 1.0)
+        } else {
+            (1.0 / ior, -1.0 / (ior * ior))
+        };
+        if near_critical(eta, cos) {
             return Err(DropReason::TotalInternalReflection);
         }
-        Ok(log_rate(p, m, self.width))
+        let FresnelRates { f, d_eta, .. } = fresnel_dielectric_rates(cos.abs().min(1.0), eta);
+        let (w, rate) = if lobe.is_transmission() {
+            (1.0 - f, -d_eta / (1.0 - f) - 2.0 / eta)
+        } else {
+            (f, d_eta / f)
+        };
+        if w <= 0.0 {
+            return Err(DropReason::TotalInternalReflection);
+        }
+        Ok(Vec3::splat((rate * deta) as f32))
     }
 }
 
@@ -108,6 +123,7 @@ fn log_rate(p: Vec3, m: Vec3, width: f32) -> Vec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use epsm_render::materials::fresnel::fresnel_dielectric;
 
     #[test]
     fn log_rate_of_a_small_positive_value_is_not_zeroed() {
@@ -119,17 +135,69 @@ mod tests {
         assert_eq!(log_rate(Vec3::ZERO, Vec3::ZERO, 1.0), Vec3::ZERO);
     }
 
+    /// `∂ ln w/∂ior` by Richardson-extrapolated central differences of the
+    /// `f64` Fresnel term, with a step 1e-2 of the distance from `ior` to
+    /// the IOR whose critical cosine is `|cos|` (from inside) or to `ior/2`.
+    fn reference_rate(lobe: Lobe, ior: f64, cos: f64) -> f64 {
+        let ln_w = |ior: f64| {
+            let eta = if cos >= 0.0 { ior } else { 1.0 / ior };
+            let f = fresnel_dielectric(cos.abs(), eta);
+            if lobe.is_transmission() {
+                (1.0 - f) / (eta * eta)
+            } else {
+                f
+            }
+            .ln()
+        };
+        let critical = 1.0 / (1.0 - cos * cos).sqrt();
+        let room = if cos < 0.0 {
+            (ior - critical).abs().min(0.5 * ior)
+        } else {
+            0.5 * ior
+        };
+        super::super::richardson(ln_w, ior, 1e-2 * room)
+    }
+
     #[test]
-    fn an_ior_difference_reaching_total_internal_reflection_is_dropped() {
+    fn the_ior_rate_of_a_delta_lobe_matches_an_f64_reference() {
+        let glass = super::super::glass();
+        let probe = Probe::new(0, &glass, Target::Ior { material: 0 }, 1.5);
+        let mut worst = 0.0f64;
+        let mut table = String::new();
+        // Entering at grazing, oblique and normal incidence; leaving near
+        // the critical cosine 0.7454 and at normal incidence.
+        for cos in [1e-3f32, 1e-2, 0.5, 0.9995, -0.76, -0.9995] {
+            let wi = Vec3::new((1.0 - cos * cos).sqrt(), 0.0, cos);
+            for lobe in [Lobe::SpecularReflection, Lobe::SpecularTransmission] {
+                let rate = probe.delta_ratio(wi, lobe).expect("not near TIR");
+                let reference = reference_rate(lobe, 1.5, f64::from(cos));
+                let error = ((f64::from(rate.x) - reference) / reference).abs();
+                worst = worst.max(error);
+                table += &format!(
+                    "\n{lobe:?} cos {cos}: {} vs {reference}, relative error {error:.2e}",
+                    rate.x
+                );
+            }
+        }
+        assert!(worst < 1e-6, "worst relative error {worst:.2e}:{table}");
+    }
+
+    #[test]
+    fn an_ior_rate_near_the_critical_angle_is_dropped() {
         let glass = super::super::glass();
         let probe = Probe::new(0, &glass, Target::Ior { material: 0 }, 1.5);
         let lobe = Lobe::SpecularTransmission;
-        // From inside, just past the critical cosine of ior 1.5 (0.745356)
-        // but not of ior 1.5 + h (0.745415).
+        // From inside, 2.4e-5 past the critical cosine of ior 1.5 (0.745356),
+        // within near_critical's 7.5e-4.
         let wi = |z: f32| Vec3::new((1.0 - z * z).sqrt(), 0.0, -z);
         assert_eq!(
             probe.delta_ratio(wi(0.74538), lobe),
             Err(DropReason::TotalInternalReflection)
+        );
+        // Total internal reflection well inside: the weight F = 1 is constant.
+        assert_eq!(
+            probe.delta_ratio(wi(0.5), Lobe::SpecularReflection),
+            Ok(Vec3::ZERO)
         );
         let away = probe.delta_ratio(wi(0.9), lobe).expect("far from critical");
         assert!(away.is_finite() && away != Vec3::ZERO);

@@ -222,3 +222,11 @@ fn glass() -> epsm_render::materials::Material {
         two_sided: true,
     }
 }
+
+/// `g′(x)` by Richardson-extrapolated central differences of steps `h` and
+/// `h/2` (truncation error `O(h⁴)`), for the submodules' tests.
+#[cfg(test)]
+fn richardson(g: impl Fn(f64) -> f64, x: f64, h: f64) -> f64 {
+    let central = |h: f64| (g(x + h) - g(x - h)) / (2.0 * h);
+    (4.0 * central(0.5 * h) - central(h)) / 3.0
+}

@@ -123,17 +123,25 @@ impl ParamTable {
         if self.index(key).is_some() {
             return Err(Error::Duplicate(key.to_owned()));
         }
+        let param = self.resolve(key)?;
+        self.params.push(param);
+        Ok(self.params.len() - 1)
+    }
+
+    /// The parameter `key` at its default value, without adding it: fails
+    /// as [`ParamTable::add`] does on a key that does not fit the scene
+    /// (but not on one already in the table).
+    pub fn resolve(&self, key: &str) -> Result<Param> {
         let target = parse(&self.names, key)?;
         let value = self.default_value(target).map_err(|message| Error::Param {
             key: key.to_owned(),
             message,
         })?;
-        self.params.push(Param {
+        Ok(Param {
             key: key.to_owned(),
             target,
             value,
-        });
-        Ok(self.params.len() - 1)
+        })
     }
 
     /// Adds the default set: translation x/y/z of every object and point

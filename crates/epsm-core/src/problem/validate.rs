@@ -51,11 +51,10 @@ pub(super) fn problem(d: &ProblemDesc, file: &Path, locator: &Locator) -> OptRes
                 .err(&f("key"), format!("`{}` is listed twice", p.key))
                 .into());
         }
-        let mut probe_table = table.clone();
-        let index = probe_table
-            .add(&p.key)
+        let param = table
+            .resolve(&p.key)
             .map_err(|e| c.err(&f("key"), e.to_string()))?;
-        let (domain, range) = probe_table.params()[index].target.domain();
+        let (domain, range) = param.target.domain();
         let within_domain = |v: f64| v >= domain[0] && v <= domain[1];
         let bounds = match p.bounds {
             Some([lo, hi]) => {

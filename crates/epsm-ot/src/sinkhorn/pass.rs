@@ -11,6 +11,7 @@ use std::ops::Range;
 use rayon::prelude::*;
 
 use super::dual::Dual;
+use crate::OtError;
 use crate::blocks::{Clustered, PointCut, PotentialFit, Selection, fit_potentials, push_merged};
 use crate::kernel::{BlockSums, RowSum, stream_blocks, stream_row};
 use crate::points::{Point, PointCloud};
@@ -183,15 +184,27 @@ pub(super) fn softmin(
     (parts.into_iter().flat_map(|p| p.0).collect(), pairs)
 }
 
+/// The barycentric projection of a plan, per source point in the clustered order.
+pub(crate) struct Barycentres {
+    /// `Σ_j π_ij y_j / Σ_j π_ij`.
+    pub points: Vec<Point>,
+    /// The mean cost `Σ_j π_ij c_ij / Σ_j π_ij`.
+    pub costs: Vec<f64>,
+    /// Kernel pairs evaluated.
+    pub pairs: u64,
+}
+
 /// Per-source-point barycentre `Σ_j π_ij y_j / Σ_j π_ij` and mean cost, in the clustered order.
 ///
 /// Pairs whose reduced cost bound exceeds `threshold` are cut per point (see [`Cut`]).
+/// Fails with [`OtError::EmptyKernelRow`] when a point's row has no mass
+/// (`RowSum::barycentre`).
 pub(crate) fn barycentres(
     x: &Clustered,
     y: &Clustered,
     dual: &Dual,
     threshold: f64,
-) -> (Vec<[f32; 5]>, Vec<f64>, u64) {
+) -> Result<Barycentres, OtError> {
     let (fx, fy) = (Level::fine(x), Level::fine(y));
     let (g32, _) = centred(&dual.g);
     let cut = Cut {
@@ -201,37 +214,49 @@ pub(crate) fn barycentres(
     let fitted = Fitted::new(&fy, &dual.g, Some(cut));
     let inv_eps = (1.0 / dual.eps) as f32;
     let cols = y.cloud.columns();
-    let parts: Vec<(Vec<(Point, f64)>, u64)> = fx
+    let parts: Option<Vec<Barycentres>> = fx
         .ranges
         .par_iter()
         .zip(&dual.support.rows)
         .map(|(rows, list)| {
-            let mut pairs = 0;
+            let mut part = Barycentres {
+                points: Vec::with_capacity(rows.len()),
+                costs: Vec::with_capacity(rows.len()),
+                pairs: 0,
+            };
             let mut targets = Targets::new(&fy, list, fitted.as_ref());
-            let out = rows
-                .clone()
-                .map(|i| {
-                    let point = x.cloud.point(i);
-                    targets.point(i, &point);
-                    let mut acc = RowSum::new();
-                    pairs += stream_row::<true>(
-                        &point,
-                        cols,
-                        &fy.log_w,
-                        &g32,
-                        inv_eps,
-                        targets.ranges(),
-                        &mut acc,
-                    );
-                    acc.barycentre()
-                })
-                .collect();
-            (out, pairs)
+            for i in rows.clone() {
+                let point = x.cloud.point(i);
+                targets.point(i, &point);
+                let mut acc = RowSum::new();
+                part.pairs += stream_row::<true>(
+                    &point,
+                    cols,
+                    &fy.log_w,
+                    &g32,
+                    inv_eps,
+                    targets.ranges(),
+                    &mut acc,
+                );
+                let (t, c) = acc.barycentre()?;
+                part.points.push(t);
+                part.costs.push(c);
+            }
+            Some(part)
         })
         .collect();
-    let pairs = parts.iter().map(|p| p.1).sum();
-    let (bary, cost) = parts.into_iter().flat_map(|p| p.0).unzip();
-    (bary, cost, pairs)
+    let parts = parts.ok_or(OtError::EmptyKernelRow { eps: dual.eps })?;
+    let mut all = Barycentres {
+        points: Vec::with_capacity(x.cloud.len()),
+        costs: Vec::with_capacity(x.cloud.len()),
+        pairs: 0,
+    };
+    for part in parts {
+        all.points.extend(part.points);
+        all.costs.extend(part.costs);
+        all.pairs += part.pairs;
+    }
+    Ok(all)
 }
 
 /// A softmin pass that also returns the plan's mass on every kept block pair.

@@ -244,3 +244,38 @@ fn sliced_identical_clouds_give_zero_loss_and_gradient() {
     assert!(r.loss.abs() <= 1e-12, "loss {}", r.loss);
     assert!(r.gradient.iter().flatten().all(|&g| g == 0.0));
 }
+
+#[test]
+fn clouds_too_spread_for_the_kernel_are_a_typed_error() {
+    let mut rng = Rng::new(6);
+    let near = random_cloud(&mut rng, 50, 1.0);
+    // (blur, a shift whose diameter²/ε is just inside MAX_SPREAD ≈ 4.3e37,
+    // shifts beyond it: 1e42, and the largest f32 coordinates).
+    for (blur, inside, outside) in [
+        (crate::MIN_BLUR, 6e14, [1e17, 3e38]),
+        (0.01, 6e16, [1e19, 3e38]),
+    ] {
+        for debias in [false, true] {
+            let m = SinkhornSettings {
+                blur,
+                debias,
+                ..SinkhornSettings::default()
+            };
+            let far = translated(&near, [0.0, 0.0, 0.0, inside, 0.0]);
+            let r = crate::sinkhorn::solve(&near, &far, &m).unwrap_or_else(|e| panic!("{e}"));
+            let mean_x = r.gradient.iter().map(|g| f64::from(g[3])).sum::<f64>() / 50.0;
+            assert!(
+                all_finite(&r) && (mean_x / (-2.0 * f64::from(inside) / 50.0) - 1.0).abs() < 1e-3,
+                "blur {blur} debias {debias}: shift {inside:e}, mean x gradient {mean_x:e}"
+            );
+            for shift in outside {
+                let far = translated(&near, [0.0, 0.0, 0.0, shift, 0.0]);
+                let r = crate::sinkhorn::solve(&near, &far, &m);
+                assert!(
+                    matches!(r, Err(OtError::SpreadTooLarge { .. })),
+                    "blur {blur} debias {debias}: shift {shift:e} gave {r:?}"
+                );
+            }
+        }
+    }
+}

@@ -1,5 +1,5 @@
-//! Fresnel reflectance of a smooth dielectric interface, and the reflection
-//! and refraction directions.
+//! Fresnel reflectance of a smooth dielectric interface (with its analytic
+//! partial derivatives), and the reflection and refraction directions.
 //!
 //! Exact unpolarised Fresnel equations (the mean of the s- and p-polarised
 //! reflectances; Born & Wolf, *Principles of Optics*, §1.5; pbrt-v4 §9.3).
@@ -12,21 +12,93 @@
 //! | `eta` | — | > 0 |
 
 use glam::Vec3;
+use num_traits::Float;
 
 /// Unpolarised Fresnel reflectance for incidence cosine `cos_i ∈ [0, 1]` and
 /// relative IOR `eta = η_t / η_i`. Returns 1 under total internal reflection.
+/// The renderer evaluates it in `f32`; derivatives evaluate it in `f64`
+/// ([`fresnel_dielectric_rates`]).
 #[inline]
-pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
-    debug_assert!(eta > 0.0);
-    let cos_i = cos_i.clamp(0.0, 1.0);
-    let sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
-    if sin2_t >= 1.0 {
-        return 1.0;
+pub fn fresnel_dielectric<T: Float>(cos_i: T, eta: T) -> T {
+    debug_assert!(eta > T::zero());
+    match amplitudes(cos_i.clamp(T::zero(), T::one()), eta) {
+        Some(a) => a.reflectance().clamp(T::zero(), T::one()),
+        None => T::one(),
     }
-    let cos_t = (1.0 - sin2_t).max(0.0).sqrt();
-    let r_s = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
-    let r_p = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
-    (0.5 * (r_s * r_s + r_p * r_p)).clamp(0.0, 1.0)
+}
+
+/// The reflectance `F` of [`fresnel_dielectric`] in `f64` with its partial
+/// derivatives, by differentiating the Fresnel equations analytically.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FresnelRates {
+    /// `F(cos_i, eta)`.
+    pub f: f64,
+    /// `∂F/∂cos_i`.
+    pub d_cos: f64,
+    /// `∂F/∂eta`.
+    pub d_eta: f64,
+}
+
+/// [`FresnelRates`] at `cos_i ∈ [0, 1]` and `eta > 0`. Under total internal
+/// reflection `F ≡ 1` and both derivatives are 0; they grow without bound
+/// as `cos_i` approaches the critical cosine `√(1 − eta²)` from above
+/// (infinite at it), so callers keep a distance from it.
+pub fn fresnel_dielectric_rates(cos_i: f64, eta: f64) -> FresnelRates {
+    debug_assert!((0.0..=1.0).contains(&cos_i) && eta > 0.0);
+    let Some(a) = amplitudes(cos_i, eta) else {
+        return FresnelRates {
+            f: 1.0,
+            d_cos: 0.0,
+            d_eta: 0.0,
+        };
+    };
+    let Amplitudes { cos_t, r_s, r_p } = a;
+    let c = cos_i;
+    // r_s = (c − η·cos_t)/(c + η·cos_t) and r_p = (η·c − cos_t)/(η·c + cos_t),
+    // with ∂cos_t/∂c = c/(η²·cos_t) and ∂cos_t/∂η = (1 − c²)/(η³·cos_t).
+    let (b, p) = (eta * cos_t, eta * c);
+    let d_s = |da: f64, db: f64| 2.0 * (b * da - c * db) / ((c + b) * (c + b));
+    let d_p = |dp: f64, dq: f64| 2.0 * (cos_t * dp - p * dq) / ((p + cos_t) * (p + cos_t));
+    let dt_dc = c / (eta * eta * cos_t);
+    let dt_deta = (1.0 - c * c) / (eta * eta * eta * cos_t);
+    FresnelRates {
+        f: a.reflectance(),
+        d_cos: r_s * d_s(1.0, eta * dt_dc) + r_p * d_p(eta, dt_dc),
+        d_eta: r_s * d_s(0.0, cos_t + eta * dt_deta) + r_p * d_p(c, dt_deta),
+    }
+}
+
+/// The transmitted cosine and the s- and p-polarised reflection amplitudes.
+#[derive(Clone, Copy)]
+struct Amplitudes<T> {
+    cos_t: T,
+    r_s: T,
+    r_p: T,
+}
+
+impl<T: Float> Amplitudes<T> {
+    /// The unpolarised reflectance, the mean of the two polarisations.
+    #[inline]
+    fn reflectance(&self) -> T {
+        let half = (T::one() + T::one()).recip();
+        half * (self.r_s * self.r_s + self.r_p * self.r_p)
+    }
+}
+
+/// The amplitudes at `cos_i ∈ [0, 1]`; `None` under total internal reflection.
+#[inline]
+fn amplitudes<T: Float>(cos_i: T, eta: T) -> Option<Amplitudes<T>> {
+    let one = T::one();
+    let sin2_t = (one - cos_i * cos_i) / (eta * eta);
+    if sin2_t >= one {
+        return None;
+    }
+    let cos_t = (one - sin2_t).max(T::zero()).sqrt();
+    Some(Amplitudes {
+        cos_t,
+        r_s: (cos_i - eta * cos_t) / (cos_i + eta * cos_t),
+        r_p: (eta * cos_i - cos_t) / (eta * cos_i + cos_t),
+    })
 }
 
 /// Mirror reflection of `wi` about the unit normal `n`.
@@ -71,6 +143,28 @@ mod tests {
         let theta_t = (theta_b.sin() / eta).asin();
         let r_s = (theta_b - theta_t).sin() / (theta_b + theta_t).sin();
         assert!((f - 0.5 * r_s * r_s).abs() < 1e-5);
+    }
+
+    #[test]
+    fn fresnel_rates_match_f64_central_differences() {
+        let central = |g: &dyn Fn(f64) -> f64, x: f64, h: f64| (g(x + h) - g(x - h)) / (2.0 * h);
+        // Critical cosine √(1 − η²) for η < 1: 0.7454 (1/1.5), 0.9105 (1/2.4).
+        for eta in [1.0001, 1.5, 2.4, 1.0 / 1.5, 1.0 / 2.4] {
+            for cos in [1e-3, 0.05, 0.3, 0.76, 0.92, 0.999] {
+                let r = fresnel_dielectric_rates(cos, eta);
+                assert_eq!(r.f, fresnel_dielectric(cos, eta), "{eta} {cos}");
+                let d_cos = central(&|c| fresnel_dielectric(c, eta), cos, 1e-7);
+                let d_eta = central(&|e| fresnel_dielectric(cos, e), eta, 1e-7);
+                for (exact, fd) in [(r.d_cos, d_cos), (r.d_eta, d_eta)] {
+                    // The differences round F by ~1e-16·F/|η − 1| (the
+                    // amplitudes cancel as η → 1) over a 2e-7 step.
+                    let tol = 1e-6 * exact.abs() + 1e-8 * r.f / (eta - 1.0).abs();
+                    assert!((exact - fd).abs() < tol, "{eta} {cos}: {exact} vs {fd}");
+                }
+            }
+        }
+        let tir = fresnel_dielectric_rates(0.5, 1.0 / 1.5);
+        assert_eq!((tir.f, tir.d_cos, tir.d_eta), (1.0, 0.0, 0.0));
     }
 
     #[test]
