@@ -10,7 +10,9 @@
 //!   luminance its blocked connection removes), and each path adds
 //!   `(w·g_xy)·dp/dθ` by one adjoint manifold solve ([`solve_adjoint`]).
 //!
-//! Paths touching no driven object are never built, and when every
+//! A record of a sample the tracer dropped ([`PathRecord::dropped`]) gives
+//! nothing and is counted once, by its reason, whatever its pixel's
+//! gradient. Paths touching no driven object are never built, and when every
 //! parameter is a material or emitter value no manifold work is done at
 //! all. Work runs on rayon over records; per-record results are reduced in
 //! record order, so the gradient is bit-identical for a seed whatever the
@@ -141,7 +143,7 @@ pub fn backprop(input: &PassInput<'_>, records: &[PathRecord]) -> (Vec<f64>, Pas
                 .get(pixel_of(r))
                 .copied()
                 .unwrap_or(DVec2::ZERO);
-            (positions && g != DVec2::ZERO).then(|| {
+            (positions && g != DVec2::ZERO && r.dropped.is_none()).then(|| {
                 let mut c = classify(r, input.scene, &motion, &settings);
                 if input.use_ == PathUse::PrimaryOnly {
                     c.paths.retain(|p| p.kind == PathKind::Primary);
@@ -178,6 +180,10 @@ pub fn backprop(input: &PassInput<'_>, records: &[PathRecord]) -> (Vec<f64>, Pas
                     ..Default::default()
                 },
             };
+            if let Some(d) = r.dropped {
+                out.stats.dropped.add(d.into());
+                return out;
+            }
             let g_rgb = input.loss.g_rgb.get(px).copied().unwrap_or(Vec3::ZERO);
             if g_rgb != Vec3::ZERO {
                 let scale = 1.0 / input.spp as f32;

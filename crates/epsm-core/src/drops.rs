@@ -6,6 +6,8 @@
 
 use std::fmt;
 
+use epsm_render::record::SampleDrop;
+
 /// Why a path was dropped.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum DropReason {
@@ -69,6 +71,15 @@ impl DropReason {
             DropReason::DegenerateTriangle => "degenerate_triangle",
             DropReason::NotDifferentiable => "not_differentiable",
             DropReason::NewtonFailed => "newton_failed",
+        }
+    }
+}
+
+impl From<SampleDrop> for DropReason {
+    /// The reason a record of a sample the tracer dropped is counted under.
+    fn from(d: SampleDrop) -> Self {
+        match d {
+            SampleDrop::NonFinite => DropReason::NonFinite,
         }
     }
 }

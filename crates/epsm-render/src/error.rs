@@ -1,6 +1,6 @@
 //! Typed, located errors.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// An error in a scene or problem file, naming the file, the field and what
 /// was expected. `field` is a dotted path such as `objects[2].material` or
@@ -65,6 +65,14 @@ pub enum Error {
         /// The underlying error.
         source: std::io::Error,
     },
+    /// An input path that is not a regular file after following symlinks
+    /// (a directory, a device such as `/dev/zero`, a FIFO, a socket):
+    /// [`crate::input_file`] refuses to read it.
+    #[error("{}: not a regular file", path.display())]
+    NotAFile {
+        /// The path.
+        path: PathBuf,
+    },
     /// An image could not be decoded or encoded.
     #[error("{}: {message}", path.display())]
     Image {
@@ -77,6 +85,14 @@ pub enum Error {
     /// sample outside the image, ...).
     #[error("invalid request: {0}")]
     Invalid(String),
+}
+
+/// The [`Error::Io`] of an I/O failure on `path`.
+pub(crate) fn io_error(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
+    |source| Error::Io {
+        path: path.to_owned(),
+        source,
+    }
 }
 
 /// Result with this crate's [`Error`].

@@ -13,14 +13,15 @@
 //! failed write leaves nothing behind.
 //! sRGB transfer functions follow IEC 61966-2-1.
 
-use std::io::Write;
+use std::fs::File;
+use std::io::{Seek, Write};
 use std::path::Path;
 
 use glam::Vec3;
 use image::ImageEncoder;
 
 use crate::atomic_file::write_atomic;
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, io_error};
 use crate::film::Image;
 
 /// Most pixels of an image read by [`read_image`] (16384 × 8192).
@@ -62,9 +63,10 @@ pub fn is_supported(path: &Path) -> bool {
 
 /// Reads a PNG (sRGB → linear) or EXR (linear) file as linear RGB.
 pub fn read_image(path: &Path) -> Result<Image> {
+    let file = crate::input_file::open(path)?;
     match format_of(path)? {
-        Format::Png => read_png(path),
-        Format::Exr => read_exr(path),
+        Format::Png => read_png(path, file),
+        Format::Exr => read_exr(path, file),
     }
 }
 
@@ -131,11 +133,7 @@ pub fn linear_to_srgb(v: f32) -> f32 {
     }
 }
 
-fn read_png(path: &Path) -> Result<Image> {
-    let file = std::fs::File::open(path).map_err(|source| Error::Io {
-        path: path.to_owned(),
-        source,
-    })?;
+fn read_png(path: &Path, file: File) -> Result<Image> {
     let decoded = image::load(std::io::BufReader::new(file), image::ImageFormat::Png)
         .map_err(|e| image_error(path, e))?
         .into_rgb32f();
@@ -207,17 +205,10 @@ fn encode_png(
         .map_err(|e| image_error(path, e))
 }
 
-/// The I/O error of a write to `path`.
-fn io_error(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
-    |source| Error::Io {
-        path: path.to_owned(),
-        source,
-    }
-}
-
-fn read_exr(path: &Path) -> Result<Image> {
-    let meta =
-        exr::meta::MetaData::read_from_file(path, false).map_err(|e| image_error(path, e))?;
+fn read_exr(path: &Path, mut file: File) -> Result<Image> {
+    use exr::prelude::{ReadChannels, ReadLayers};
+    let meta = exr::meta::MetaData::read_from_unbuffered(&file, false)
+        .map_err(|e| image_error(path, e))?;
     for header in &meta.headers {
         let (w, h) = (header.layer_size.width(), header.layer_size.height());
         if w.checked_mul(h).is_none_or(|n| n > MAX_IMAGE_PIXELS) {
@@ -225,18 +216,24 @@ fn read_exr(path: &Path) -> Result<Image> {
             return Err(image_error(path, msg));
         }
     }
-    let read = exr::prelude::read_first_rgba_layer_from_file(
-        path,
-        |size, _| Image::new(size.width() as u32, size.height() as u32),
-        |img: &mut Image, pos: exr::math::Vec2<usize>, (r, g, b, _a): (f32, f32, f32, f32)| {
-            img.set(pos.x() as u32, pos.y() as u32, Vec3::new(r, g, b));
-        },
-    )
-    .map_err(|e| image_error(path, e))?;
+    file.rewind().map_err(io_error(path))?;
+    let read = exr::prelude::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .rgba_channels(
+            |size, _| Image::new(size.width() as u32, size.height() as u32),
+            |img: &mut Image, pos: exr::math::Vec2<usize>, (r, g, b, _a): (f32, f32, f32, f32)| {
+                img.set(pos.x() as u32, pos.y() as u32, Vec3::new(r, g, b));
+            },
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .from_unbuffered(file)
+        .map_err(|e| image_error(path, e))?;
     Ok(read.layer_data.channel_data.pixels)
 }
 
-fn write_exr(path: &Path, img: &Image, mut out: impl Write + std::io::Seek) -> Result<()> {
+fn write_exr(path: &Path, img: &Image, mut out: impl Write + Seek) -> Result<()> {
     use exr::prelude::WritableImage;
     let size = (img.width as usize, img.height as usize);
     let channels = exr::image::SpecificChannels::rgb(|pos: exr::math::Vec2<usize>| {
@@ -254,10 +251,7 @@ fn write_exr(path: &Path, img: &Image, mut out: impl Write + std::io::Seek) -> R
         .write()
         .to_buffered(&mut out)
         .map_err(|e| image_error(path, e))?;
-    out.flush().map_err(|source| Error::Io {
-        path: path.to_owned(),
-        source,
-    })
+    out.flush().map_err(io_error(path))
 }
 
 #[cfg(test)]

@@ -37,6 +37,7 @@ pub mod film;
 pub mod frame;
 pub mod hit;
 pub mod image_io;
+pub mod input_file;
 pub mod lights;
 pub mod materials;
 pub mod ray;

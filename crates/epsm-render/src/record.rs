@@ -5,6 +5,12 @@
 //! need. Recording observes the tracer: it never changes the random numbers
 //! consumed or the radiance computed (the only extra work is a closest-hit
 //! query on blocked shadow rays, to name the first occluder).
+//!
+//! A sample the tracer drops (its radiance was not finite: the image gets
+//! zero for it) keeps a record that says so ([`PathRecord::dropped`]) and
+//! holds nothing else: no vertices, connections or escaped radiance, and a
+//! zero radiance, as the image has. Nothing of it can be mistaken for a
+//! path to differentiate, and its consumers count the drop once.
 
 use glam::{UVec2, Vec2, Vec3};
 
@@ -96,6 +102,14 @@ pub struct OccluderRecord {
     pub p: Vec3,
 }
 
+/// Why the tracer dropped a pixel sample.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum SampleDrop {
+    /// Its radiance was NaN or infinite (counted in
+    /// [`TraceCounters::non_finite`](crate::tracer::TraceCounters::non_finite)).
+    NonFinite,
+}
+
 /// A recorded path for one pixel sample.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct PathRecord {
@@ -113,9 +127,24 @@ pub struct PathRecord {
     pub escaped: Vec3,
     /// The sample's total radiance (what the image accumulates).
     pub radiance: Vec3,
+    /// Set when the tracer dropped the sample; the record then holds only
+    /// its pixel, sample and film position.
+    pub dropped: Option<SampleDrop>,
 }
 
 impl PathRecord {
+    /// Marks the sample dropped for `reason`: clears everything recorded
+    /// but which sample it is, so its radiance is zero, as in the image.
+    pub(crate) fn drop_sample(&mut self, reason: SampleDrop) {
+        *self = PathRecord {
+            pixel: self.pixel,
+            sample: self.sample,
+            film: self.film,
+            dropped: Some(reason),
+            ..PathRecord::default()
+        };
+    }
+
     /// Whether the path touches object `id` at a recorded vertex, light point
     /// or occluder.
     pub fn touches(&self, id: ObjectId) -> bool {

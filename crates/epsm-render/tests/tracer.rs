@@ -4,9 +4,10 @@
 use std::path::Path;
 
 use epsm_render::Scene;
-use epsm_render::record::RecordLevel;
+use epsm_render::record::{RecordLevel, SampleDrop};
 use epsm_render::scene::load::parts_from_str;
 use epsm_render::tracer::{RenderOptions, render, render_recorded};
+use epsm_testkit::scenes::{OVERFLOWING_LIGHT, OVERHEAD_CAMERA};
 use glam::{UVec2, Vec3};
 
 fn scene(toml: &str) -> Scene {
@@ -157,27 +158,6 @@ fn floor_point(scene: &Scene, x: u32, y: u32) -> Vec3 {
         .ray(glam::Vec2::new(x as f32 + 0.5, y as f32 + 0.5));
     r.at(-r.origin.y / r.dir.y)
 }
-
-const OVERHEAD_CAMERA: &str = r#"
-    [camera]
-    origin = [0, 3, 0]
-    target = [0, 0, 0]
-    up = [0, 0, -1]
-    fov = 6
-    resolution = [16, 16]
-    [materials.floor]
-    type = "diffuse"
-    albedo = [0.5, 0.5, 0.5]
-    [materials.black]
-    type = "diffuse"
-    albedo = [0, 0, 0]
-    [[objects]]
-    name = "floor"
-    shape = "rectangle"
-    material = "floor"
-    scale = 5
-    rotate = [{ axis = [1, 0, 0], angle = -90 }]
-"#;
 
 #[test]
 fn diffuse_plane_under_a_point_light_matches_analytic_irradiance() {
@@ -350,4 +330,37 @@ fn records_hold_what_each_level_promises() {
         caustic,
         "full records of the caustic box must contain camera → D → S paths"
     );
+}
+
+#[test]
+fn a_dropped_sample_has_a_record_that_says_so_and_holds_nothing_else() {
+    let s = scene(&format!("{OVERHEAD_CAMERA}{OVERFLOWING_LIGHT}"));
+    let o = opts(&s, 2);
+    let plain = render(&s, &o, &|_| {});
+    let dropped = plain.counters.non_finite;
+    assert!(
+        dropped > 0 && dropped < plain.samples,
+        "the scene must drop some samples and keep others: {dropped} of {}",
+        plain.samples
+    );
+    for level in [
+        RecordLevel::Primary,
+        RecordLevel::FirstDiffuse,
+        RecordLevel::Full,
+    ] {
+        let (rec, paths) = render_recorded(&s, &o, level, &|_| {});
+        assert_eq!(rec.image, plain.image, "{level:?}");
+        let marked: Vec<_> = paths.iter().filter(|p| p.dropped.is_some()).collect();
+        assert_eq!(marked.len() as u64, dropped, "{level:?}");
+        for p in marked {
+            assert_eq!(p.dropped, Some(SampleDrop::NonFinite));
+            assert!(p.vertices.is_empty() && p.connections.is_empty());
+            assert_eq!((p.radiance, p.escaped), (Vec3::ZERO, Vec3::ZERO));
+        }
+        for p in &paths {
+            assert!(p.radiance.is_finite() && p.escaped.is_finite());
+            assert!(p.vertices.iter().all(|v| v.contribution.is_finite()));
+            assert!(p.connections.iter().all(|c| c.contribution.is_finite()));
+        }
+    }
 }

@@ -13,7 +13,8 @@
 //! `checked`, `median_rel_err`, `max_rel_err`, `dropped` (and
 //! `ill_conditioned`, `max_adjoint_rel_err`), plus `not_classified`: the
 //! paths dropped before any check (while building or projecting them), by
-//! reason, as the text form's last line.
+//! reason, as the text form's last line (a sample the tracer dropped for a
+//! non-finite radiance counts there once, as `non_finite`).
 
 use std::path::PathBuf;
 

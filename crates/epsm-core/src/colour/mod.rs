@@ -106,10 +106,10 @@ impl ColourModel {
     /// `dc/dθ` of one path sample as `(parameter, ∂c/∂θ per channel)`
     /// entries (a parameter may appear more than once; entries add up).
     /// `motion` is the placement at θ; terms left out are counted in
-    /// `skipped`. Material and emission terms of a record with a non-finite
-    /// value (e.g. a sample the tracer zeroed as non-finite, whose vertex
-    /// contributions stay recorded) are dropped together and counted as
-    /// [`DropReason::NonFinite`].
+    /// `skipped`. Material and emission terms with a non-finite value are
+    /// dropped together and counted as [`DropReason::NonFinite`]. The record
+    /// of a sample the tracer dropped ([`PathRecord::dropped`]) gives no
+    /// terms and is not counted here: the gradient pass counts it once.
     pub fn gradient(
         &self,
         record: &PathRecord,
@@ -118,7 +118,7 @@ impl ColourModel {
         skipped: &mut DropCounts,
     ) -> Vec<(usize, Vec3)> {
         let mut out = Vec::new();
-        if self.is_empty() {
+        if self.is_empty() || record.dropped.is_some() {
             return out;
         }
         self.values(record, scene, &mut out, skipped);

@@ -138,7 +138,9 @@ enum End {
 
 /// Classifies a record into differentiable paths, with vertex tangents built
 /// in `motion` (the current θ, which becomes θ₀ for these paths), each
-/// projected onto its manifold (the guards of `settings` apply).
+/// projected onto its manifold (the guards of `settings` apply). The record
+/// of a sample the tracer dropped yields no path and is counted once, by
+/// its reason ([`PathRecord::dropped`]).
 pub fn classify(
     record: &PathRecord,
     scene: &Scene,
@@ -146,6 +148,10 @@ pub fn classify(
     settings: &SolveSettings,
 ) -> Classified {
     let mut out = Classified::default();
+    if let Some(d) = record.dropped {
+        out.skipped.add(d.into());
+        return out;
+    }
     let v = &record.vertices;
     if v.is_empty() {
         return out;

@@ -221,11 +221,7 @@ impl Problem {
 
 /// Loads and checks the problem file at `path`.
 pub fn load_problem(path: &Path) -> OptResult<Problem> {
-    let text = std::fs::read_to_string(path).map_err(|source| epsm_render::Error::Io {
-        path: path.to_owned(),
-        source,
-    })?;
-    problem_from_str(&text, path)
+    problem_from_str(&epsm_render::input_file::read_to_string(path)?, path)
 }
 
 /// Checks the text of a problem file; `file` names it in errors and its

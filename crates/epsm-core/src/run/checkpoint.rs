@@ -156,7 +156,7 @@ impl Optimization {
             path: path.to_owned(),
             message,
         };
-        let text = std::fs::read_to_string(path).map_err(|e| err(e.to_string()))?;
+        let text = epsm_render::input_file::read_to_string(path)?;
         serde_json::from_str(&text).map_err(|e| err(e.to_string()))
     }
 }

@@ -79,10 +79,7 @@ pub fn load_file(path: &Path) -> Result<Loaded> {
         .map(str::to_ascii_lowercase);
     match ext.as_deref() {
         Some("toml") => {
-            let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
-                path: path.to_owned(),
-                source,
-            })?;
+            let text = crate::input_file::read_to_string(path)?;
             Ok(Loaded {
                 parts: parts_from_str(&text, path)?,
                 warnings: Vec::new(),

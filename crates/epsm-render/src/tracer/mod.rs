@@ -26,7 +26,7 @@ use crate::bvh::{BoxTest, Portable};
 use crate::camera::FilmRays;
 use crate::film::Image;
 use crate::ray::Ray;
-use crate::record::{PathRecord, RecordLevel};
+use crate::record::{PathRecord, RecordLevel, SampleDrop};
 use crate::sampler::{PixelKeys, PixelSampler};
 use crate::scene::Scene;
 
@@ -86,7 +86,8 @@ pub struct TraceCounters {
     pub rays: u64,
     /// Shadow rays traced.
     pub shadow_rays: u64,
-    /// Samples whose radiance was NaN or infinite (dropped).
+    /// Samples whose radiance was NaN or infinite (dropped: zero in the
+    /// image, and a record marked [`SampleDrop::NonFinite`]).
     pub non_finite: u64,
     /// Paths ended because the sampled direction lay on the wrong side of the
     /// geometric normal for its lobe (shading-normal light leak).
@@ -358,7 +359,8 @@ fn camera_sample<'a>(
 }
 
 /// Traces a pixel sample from its [`camera_sample`] (box tests by `boxes`);
-/// returns its radiance (zero, and counted, when it was not finite).
+/// returns its radiance (zero, counted, and its record marked dropped, when
+/// it was not finite).
 #[inline(always)]
 fn trace_pixel_sample(
     scene: &Scene,
@@ -388,14 +390,16 @@ fn trace_pixel_sample(
         }
     });
     let l = trace_path(scene, opts, ray, &sampler, rec.as_mut(), counters, boxes);
-    let l = if l.is_finite() {
+    if l.is_finite() {
+        if let Some(r) = rec {
+            r.rec.radiance = l;
+        }
         l
     } else {
         counters.non_finite += 1;
+        if let Some(r) = rec {
+            r.rec.drop_sample(SampleDrop::NonFinite);
+        }
         Vec3::ZERO
-    };
-    if let Some(r) = rec {
-        r.rec.radiance = l;
     }
-    l
 }

@@ -29,10 +29,7 @@ use crate::scene::Mesh;
 
 /// Reads the glTF or GLB file at `path` into one mesh (not yet validated).
 pub fn load(path: &Path) -> Result<Mesh> {
-    let bytes = std::fs::read(path).map_err(|source| Error::Io {
-        path: path.to_owned(),
-        source,
-    })?;
+    let bytes = crate::input_file::read(path)?;
     let file = open(&bytes, path)?;
     let mut mesh = Mesh::default();
     for placed in walk(&file.doc, path)? {
@@ -141,15 +138,11 @@ fn buffer(
                         .as_ref(),
                 ),
             };
-            let io = |e: std::io::Error| format!("uri: {}: {e}", path.display());
-            let file = std::fs::File::open(&path).map_err(io)?;
-            if !file.metadata().map_err(io)?.is_file() {
-                return Err(format!("uri: {} is not a regular file", path.display()));
-            }
+            let file = crate::input_file::open(&path).map_err(|e| format!("uri: {e}"))?;
             let mut data = Vec::new();
             file.take(b.length() as u64)
                 .read_to_end(&mut data)
-                .map_err(io)?;
+                .map_err(|e| format!("uri: {}: {e}", path.display()))?;
             data
         }
     };

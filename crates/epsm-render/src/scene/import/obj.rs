@@ -22,11 +22,7 @@ use crate::scene::Mesh;
 
 /// Reads the OBJ file at `path` into one mesh (not yet validated).
 pub fn load(path: &Path) -> Result<Mesh> {
-    let bytes = std::fs::read(path).map_err(|source| crate::error::Error::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    parse(&bytes, path)
+    parse(&crate::input_file::read(path)?, path)
 }
 
 /// Parses OBJ text into one mesh (not yet validated); `file` names it in

@@ -50,11 +50,7 @@ pub const LUMENS_PER_WATT: f64 = 683.0;
 
 /// Loads the glTF or GLB scene at `path`.
 pub fn load(path: &Path) -> Result<Loaded> {
-    let bytes = std::fs::read(path).map_err(|source| Error::Io {
-        path: path.to_owned(),
-        source,
-    })?;
-    from_slice(&bytes, path)
+    from_slice(&crate::input_file::read(path)?, path)
 }
 
 /// Builds a scene from the bytes of a glTF or GLB file; `file` names it in

@@ -38,7 +38,7 @@ use glam::Vec3;
 use self::bsdf::{Definitions, target};
 use self::emitter::Emitter;
 use self::parse::{Element, finish};
-use crate::error::{Error, Result, SceneError};
+use crate::error::{Result, SceneError};
 use crate::lights::Background;
 use crate::materials::{Bsdf, Diffuse, Material, Texture};
 use crate::scene::load::Loaded;
@@ -48,11 +48,7 @@ use crate::scene::{Object, SceneParts};
 
 /// Loads the Mitsuba XML scene at `path`.
 pub fn load(path: &Path) -> Result<Loaded> {
-    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
-        path: path.to_owned(),
-        source,
-    })?;
-    from_str(&text, path)
+    from_str(&crate::input_file::read_to_string(path)?, path)
 }
 
 /// Builds a scene from the text of a Mitsuba XML file; `file` names it in

@@ -32,11 +32,7 @@ use crate::scene::Mesh;
 
 /// Reads the PLY file at `path` into one mesh (not yet validated).
 pub fn load(path: &Path) -> Result<Mesh> {
-    let bytes = std::fs::read(path).map_err(|source| Error::Io {
-        path: path.to_owned(),
-        source,
-    })?;
-    parse(&bytes, path)
+    parse(&crate::input_file::read(path)?, path)
 }
 
 /// Parses the bytes of a PLY file; `file` names it in errors.
