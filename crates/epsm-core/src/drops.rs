@@ -76,7 +76,8 @@ impl DropReason {
 }
 
 impl From<SampleDrop> for DropReason {
-    /// The reason a record of a sample the tracer dropped is counted under.
+    /// The reason a sample, or a shadow's strength, the tracer dropped is
+    /// counted under.
     fn from(d: SampleDrop) -> Self {
         match d {
             SampleDrop::NonFinite => DropReason::NonFinite,

@@ -218,6 +218,7 @@ fn a_point_lights_shadow_of_a_point_occluder_moves_by_similar_triangles() {
                 at: m.at(occluder, 0, o),
                 p: o.as_vec3(),
             }),
+            dropped: None,
         }],
         ..PathRecord::default()
     };

@@ -87,10 +87,16 @@ pub struct ConnectionRecord {
     /// The radiance the connection added (zero when blocked).
     pub contribution: Vec3,
     /// What the contribution would have been if the ray were unblocked: the
-    /// shadow's strength.
+    /// shadow's strength (zero when `dropped`).
     pub unoccluded: Vec3,
     /// The first occluder when the shadow ray was blocked.
     pub occluder: Option<OccluderRecord>,
+    /// Set when the tracer dropped the shadow's strength: the ray was
+    /// blocked and `unoccluded` was NaN or infinite. The sample's radiance
+    /// does not include that strength, so the sample stays; `unoccluded` is
+    /// zero and the derivative side counts the shadow dropped by this
+    /// reason where it would have used it.
+    pub dropped: Option<SampleDrop>,
 }
 
 /// The first surface that blocked a shadow ray.
@@ -102,11 +108,13 @@ pub struct OccluderRecord {
     pub p: Vec3,
 }
 
-/// Why the tracer dropped a pixel sample.
+/// Why the tracer dropped a pixel sample ([`PathRecord::dropped`]) or a
+/// blocked connection's strength ([`ConnectionRecord::dropped`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum SampleDrop {
-    /// Its radiance was NaN or infinite (counted in
-    /// [`TraceCounters::non_finite`](crate::tracer::TraceCounters::non_finite)).
+    /// A sample's radiance was NaN or infinite (counted in
+    /// [`TraceCounters::non_finite`](crate::tracer::TraceCounters::non_finite)),
+    /// or a blocked connection's unoccluded strength was.
     NonFinite,
 }
 

@@ -185,3 +185,32 @@ fn external_buffers_are_read_up_to_their_byte_length_from_regular_files_only() {
         assert!(msg.contains("tri.gltf") && msg.contains(expected), "{msg}");
     }
 }
+
+/// As a data store lays files out: each name a symlink to a blob without an
+/// extension in a store of its own. A scene naming `tri.gltf` reads it as
+/// glTF, and its buffer `tri.bin` resolves beside the link, not the blob.
+#[cfg(unix)]
+#[test]
+fn a_gltf_named_through_a_link_reads_its_buffers_beside_the_link() {
+    use std::os::unix::fs::symlink;
+    let store = tempfile::tempdir().expect("temp dir");
+    let gltf = write_gltf(store.path(), 4);
+    let blobs = [
+        ("tri.gltf", gltf),
+        ("tri.bin", store.path().join("tri.bin")),
+    ];
+    let dir = tempfile::tempdir().expect("temp dir");
+    for (i, (name, file)) in blobs.into_iter().enumerate() {
+        let blob = store.path().join(format!("blob{i}"));
+        std::fs::rename(file, &blob).expect("rename");
+        symlink(&blob, dir.path().join(name)).expect("symlink");
+    }
+    let scene = dir.path().join("scene.toml");
+    let extra = "[[objects]]\nname = \"tri\"\nmesh = \"tri.gltf\"\nmaterial = \"floor\"\n";
+    let text = format!("{}{extra}", epsm_testkit::scenes::OVERHEAD_CAMERA);
+    std::fs::write(&scene, text).expect("write scene");
+    let parts = epsm_render::scene::load::load_file(&scene)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .parts;
+    assert_flattened(&parts.objects[1].mesh);
+}

@@ -8,7 +8,7 @@ use std::path::Path;
 use epsm_render::scene::import::load_mesh;
 use epsm_render::scene::load::load_file;
 use epsm_testkit::scenes::OVERHEAD_CAMERA;
-use epsm_testkit::special::{Special, each, refused};
+use epsm_testkit::special::{each, refused};
 
 /// Writes `dir/scene.toml`, the overhead floor plus `extra`, and returns
 /// the error of loading it, checked to name the scene file and `field`.
@@ -57,14 +57,13 @@ fn a_mesh_that_is_dev_zero_or_a_fifo_is_refused_naming_the_field() {
         let mesh =
             format!("[[objects]]\nname = \"bunny\"\nmesh = \"{name}\"\nmaterial = \"floor\"\n");
         each(&name, |kind, dir, path| {
-            // A scene resolves a mesh path through its symlinks, and
-            // `/dev/zero` has no mesh extension: that is the error there.
+            // The format comes from the name as written, not from the
+            // link's target (`/dev/zero` has no extension).
             let msg = scene_error(dir, &mesh, "objects[1].mesh");
-            if kind == Special::Fifo {
-                assert!(msg.contains("not a regular file"), "{name}: {msg}");
-            }
-            // A path given as it is (a caller of load_mesh) keeps its
-            // extension and reaches the reader.
+            assert!(
+                msg.contains(&format!("{name}: not a regular file")),
+                "{kind:?} {name}: {msg}"
+            );
             let msg = refused(move || load_mesh(&path));
             assert!(
                 msg.contains(&format!("{name}: not a regular file")),
@@ -82,6 +81,27 @@ fn a_scene_file_that_is_dev_zero_or_a_fifo_is_refused_naming_it() {
             assert!(
                 msg.contains(&format!("{name}: not a regular file")),
                 "{kind:?}: {msg}"
+            );
+        });
+    }
+}
+
+#[test]
+fn a_mitsuba_mesh_that_is_dev_zero_or_a_fifo_is_refused_naming_the_field() {
+    for ext in ["obj", "ply"] {
+        let name = format!("special.{ext}");
+        each(&name, |kind, dir, _| {
+            let scene = dir.join("scene.xml");
+            let text = format!(
+                "<scene version=\"3.0.0\">\n<sensor type=\"perspective\"><float name=\"fov\" value=\"40\"/></sensor>\n<shape type=\"{ext}\" id=\"s\"><string name=\"filename\" value=\"{name}\"/></shape>\n</scene>\n"
+            );
+            std::fs::write(&scene, text).expect("write scene");
+            let msg = refused(move || load_file(&scene));
+            assert!(
+                msg.contains("scene.xml")
+                    && msg.contains("shape[s].filename")
+                    && msg.contains(&format!("{name}: not a regular file")),
+                "{kind:?} {name}: {msg}"
             );
         });
     }

@@ -7,7 +7,7 @@ use epsm_render::Scene;
 use epsm_render::record::{RecordLevel, SampleDrop};
 use epsm_render::scene::load::parts_from_str;
 use epsm_render::tracer::{RenderOptions, render, render_recorded};
-use epsm_testkit::scenes::{OVERFLOWING_LIGHT, OVERHEAD_CAMERA};
+use epsm_testkit::scenes::{OVERFLOWING_LIGHT, OVERHEAD_CAMERA, WALL_BESIDE_THE_LIGHT};
 use glam::{UVec2, Vec3};
 
 fn scene(toml: &str) -> Scene {
@@ -362,5 +362,38 @@ fn a_dropped_sample_has_a_record_that_says_so_and_holds_nothing_else() {
             assert!(p.vertices.iter().all(|v| v.contribution.is_finite()));
             assert!(p.connections.iter().all(|c| c.contribution.is_finite()));
         }
+    }
+}
+
+#[test]
+fn a_blocked_connection_whose_strength_is_not_finite_is_marked_and_holds_zero() {
+    let s = scene(&format!(
+        "{OVERHEAD_CAMERA}{OVERFLOWING_LIGHT}{WALL_BESIDE_THE_LIGHT}"
+    ));
+    let o = opts(&s, 2);
+    let plain = render(&s, &o, &|_| {});
+    for level in [RecordLevel::FirstDiffuse, RecordLevel::Full] {
+        let (rec, paths) = render_recorded(&s, &o, level, &|_| {});
+        assert_eq!(rec.image, plain.image, "{level:?}");
+        let connections: Vec<_> = paths.iter().flat_map(|p| &p.connections).collect();
+        let marked: Vec<_> = connections.iter().filter(|c| c.dropped.is_some()).collect();
+        assert!(
+            !marked.is_empty(),
+            "{level:?}: the wall must block overflowing shadows"
+        );
+        for c in marked {
+            assert_eq!(c.dropped, Some(SampleDrop::NonFinite));
+            assert!(c.occluder.is_some());
+            assert_eq!((c.contribution, c.unoccluded), (Vec3::ZERO, Vec3::ZERO));
+        }
+        assert!(
+            connections
+                .iter()
+                .any(|c| c.occluder.is_some() && c.dropped.is_none())
+        );
+        assert!(
+            connections.iter().all(|c| c.unoccluded.is_finite()),
+            "{level:?}"
+        );
     }
 }

@@ -36,3 +36,17 @@ name = "p"
 position = [0.15, 0.01, 0]
 intensity = [1e37, 1e37, 1e37]
 "#;
+
+/// A black wall for [`OVERFLOWING_LIGHT`] (`wall`, in the plane x = 0.1,
+/// 0.02 high, across the view): it blocks the light from the floor left of
+/// it, where the strength of those shadows (the radiance the blocked
+/// connections would have added) overflows to infinity near the light.
+pub const WALL_BESIDE_THE_LIGHT: &str = r#"
+[[objects]]
+name = "wall"
+shape = "rectangle"
+material = "black"
+scale = [0.3, 0.02, 1]
+rotate = [{ axis = [0, 1, 0], angle = 90 }]
+translate = [0.1, 0, 0]
+"#;

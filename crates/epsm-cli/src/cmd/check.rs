@@ -14,7 +14,8 @@
 //! `ill_conditioned`, `max_adjoint_rel_err`), plus `not_classified`: the
 //! paths dropped before any check (while building or projecting them), by
 //! reason, as the text form's last line (a sample the tracer dropped for a
-//! non-finite radiance counts there once, as `non_finite`).
+//! non-finite radiance counts there once, as `non_finite`, and so does a
+//! shadow whose blocked connection's strength was not finite).
 
 use std::path::PathBuf;
 

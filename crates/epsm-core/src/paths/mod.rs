@@ -140,7 +140,8 @@ enum End {
 /// in `motion` (the current θ, which becomes θ₀ for these paths), each
 /// projected onto its manifold (the guards of `settings` apply). The record
 /// of a sample the tracer dropped yields no path and is counted once, by
-/// its reason ([`PathRecord::dropped`]).
+/// its reason ([`PathRecord::dropped`]); so is a shadow whose strength it
+/// dropped ([`ConnectionRecord::dropped`]).
 pub fn classify(
     record: &PathRecord,
     scene: &Scene,
@@ -247,19 +248,22 @@ pub fn classify(
                 &mut out,
             );
         }
-        // Shadows at D.
+        // Shadows at D (one whose strength the tracer dropped is counted).
         for conn in record
             .connections
             .iter()
             .filter(|c| c.vertex == 0 && c.occluder.is_some())
         {
-            push(
-                PathKind::Shadow,
-                &[0],
-                Some(End::Light(*conn)),
-                conn.unoccluded,
-                &mut out,
-            );
+            match conn.dropped {
+                Some(d) => out.skipped.add(d.into()),
+                None => push(
+                    PathKind::Shadow,
+                    &[0],
+                    Some(End::Light(*conn)),
+                    conn.unoccluded,
+                    &mut out,
+                ),
+            }
         }
     }
     push(

@@ -263,6 +263,7 @@ impl Builder<'_> {
             },
             unoccluded: Vec3::splat(0.2),
             occluder,
+            dropped: None,
         });
         Some(())
     }

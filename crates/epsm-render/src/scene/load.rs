@@ -27,6 +27,7 @@
 pub(crate) mod build;
 pub(crate) mod check;
 mod locate;
+pub(crate) mod named;
 pub(crate) mod object;
 
 use std::path::Path;

@@ -12,7 +12,8 @@ use crate::hit::SurfacePoint;
 use crate::materials::{Material, VertexKind};
 use crate::ray::{Ray, offset_origin};
 use crate::record::{
-    ConnectionRecord, OccluderRecord, PathRecord, RecordLevel, TrianglePoint, VertexRecord,
+    ConnectionRecord, OccluderRecord, PathRecord, RecordLevel, SampleDrop, TrianglePoint,
+    VertexRecord,
 };
 use crate::sampler::{Block, PixelSampler};
 use crate::scene::Scene;
@@ -269,14 +270,24 @@ fn next_event(
     if !blocked {
         out.contribution = unoccluded;
     }
-    out.connection = record_at.map(|vertex| ConnectionRecord {
-        vertex,
-        light: ls.source,
-        light_position: ls.position,
-        light_normal: ls.normal,
-        contribution: out.contribution,
-        unoccluded,
-        occluder: blocked.then(|| first_occluder(scene, &shadow)).flatten(),
+    out.connection = record_at.map(|vertex| {
+        // Unblocked, a non-finite strength is the contribution and drops
+        // the whole sample; blocked, only the record holds it.
+        let dropped = (blocked && !unoccluded.is_finite()).then_some(SampleDrop::NonFinite);
+        ConnectionRecord {
+            vertex,
+            light: ls.source,
+            light_position: ls.position,
+            light_normal: ls.normal,
+            contribution: out.contribution,
+            unoccluded: if dropped.is_some() {
+                Vec3::ZERO
+            } else {
+                unoccluded
+            },
+            occluder: blocked.then(|| first_occluder(scene, &shadow)).flatten(),
+            dropped,
+        }
     });
     out
 }

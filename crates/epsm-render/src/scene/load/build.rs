@@ -3,12 +3,12 @@
 //! [`object`](super::object).
 
 use std::collections::{HashMap, HashSet};
-use std::path::PathBuf;
 use std::sync::Arc;
 
 use glam::DVec3;
 
 use super::check::Ctx;
+use super::named::NamedFile;
 use super::object::Objects;
 use crate::camera::Camera;
 use crate::error::{Error, Result};
@@ -26,8 +26,8 @@ pub const MAX_RESOLUTION: u32 = 16384;
 /// Largest accepted `max_depth`.
 pub const MAX_DEPTH: u32 = 1024;
 
-/// Images loaded so far, by canonical path (a texture used twice loads once).
-pub type ImageCache = HashMap<PathBuf, Arc<Image>>;
+/// Images loaded so far (a texture used twice loads once).
+pub type ImageCache = HashMap<NamedFile, Arc<Image>>;
 
 /// Builds all parts of `desc`.
 pub fn parts(desc: &SceneDesc, ctx: &Ctx) -> Result<SceneParts> {
@@ -141,18 +141,16 @@ pub(crate) fn image(
         let msg = format!("expected a .png or .exr file, found \"{relative}\"");
         return Err(ctx.err(field, msg));
     }
-    let canonical = path
-        .canonicalize()
-        .map_err(|e| ctx.err(field, format!("cannot open {}: {e}", path.display())))?;
-    let img = match images.get(&canonical) {
+    let file = NamedFile::new(path, field, ctx)?;
+    let img = match images.get(&file) {
         Some(img) => img.clone(),
         None => {
-            let img = Arc::new(read_image(&canonical).map_err(|e| ctx.nested(field, &e))?);
-            images.insert(canonical.clone(), img.clone());
+            let img = Arc::new(read_image(&file.path).map_err(|e| ctx.nested(field, &e))?);
+            images.insert(file.clone(), img.clone());
             img
         }
     };
-    check_values(&canonical, &img, max).map_err(|e| ctx.nested(field, &e))?;
+    check_values(&file.path, &img, max).map_err(|e| ctx.nested(field, &e))?;
     Ok(img)
 }
 

@@ -3,12 +3,12 @@
 //! · … · rotate[0] · scale`), material references and emission.
 
 use std::collections::{HashMap, HashSet};
-use std::path::PathBuf;
 use std::sync::Arc;
 
 use glam::{DAffine3, DMat3, DQuat, DVec3};
 
 use super::check::Ctx;
+use super::named::NamedFile;
 use crate::error::Result;
 use crate::materials::Material;
 use crate::scene::desc::{ObjectDesc, ScaleDesc, ShapeKind};
@@ -19,8 +19,8 @@ use crate::scene::{Mesh, Object, import, shapes};
 enum Source {
     /// A built-in shape with its checked subdivisions.
     Shape(ShapeKind, Option<u32>),
-    /// A mesh file, by canonical path.
-    File(PathBuf),
+    /// A mesh file.
+    File(NamedFile),
 }
 
 /// Builds objects, sharing meshes between objects that use the same source.
@@ -99,13 +99,11 @@ impl<'a> Objects<'a> {
             (None, Some(file)) => {
                 no_subdivisions("mesh files")?;
                 let path = ctx.resolve(file);
-                let canonical = path.canonicalize().map_err(|e| {
-                    ctx.err(
-                        &format!("{field}.mesh"),
-                        format!("cannot open {}: {e}", path.display()),
-                    )
-                })?;
-                Ok(Source::File(canonical))
+                Ok(Source::File(NamedFile::new(
+                    path,
+                    &format!("{field}.mesh"),
+                    ctx,
+                )?))
             }
             (Some(kind), None) => {
                 let sub = match (kind, d.subdivisions) {
@@ -137,8 +135,8 @@ impl<'a> Objects<'a> {
         let mesh = match (&source, flip) {
             (_, true) => Arc::new(flipped(self.mesh(field, source.clone(), false)?.as_ref())),
             (Source::Shape(kind, sub), false) => Arc::new(shapes::build(*kind, *sub)),
-            (Source::File(path), false) => Arc::new(
-                import::load_mesh(path)
+            (Source::File(file), false) => Arc::new(
+                import::load_mesh(&file.path)
                     .map_err(|e| self.ctx.nested(&format!("{field}.mesh"), &e))?,
             ),
         };

@@ -23,7 +23,6 @@
 //! ```
 
 use std::collections::HashMap;
-use std::path::PathBuf;
 use std::sync::Arc;
 
 use glam::{DAffine3, DVec3, Vec3};
@@ -35,6 +34,7 @@ use crate::scene::Mesh;
 use crate::scene::desc::ShapeKind;
 use crate::scene::import::load_mesh;
 use crate::scene::load::check::Ctx;
+use crate::scene::load::named::NamedFile;
 use crate::scene::load::object::flipped;
 use crate::scene::shapes;
 
@@ -56,7 +56,7 @@ pub(crate) struct Shape {
 #[derive(Clone, PartialEq, Eq, Hash)]
 enum Source {
     Builtin(ShapeKind),
-    File(PathBuf, bool),
+    File(NamedFile, bool),
 }
 
 /// Builds shapes, reading each mesh source once.
@@ -83,13 +83,7 @@ impl Shapes {
                     .string(ctx, "filename")?
                     .ok_or_else(|| ctx.err(&field("filename"), "required"))?;
                 let path = ctx.resolve(name);
-                let canonical = path.canonicalize().map_err(|e| {
-                    ctx.err(
-                        &field("filename"),
-                        format!("cannot open {}: {e}", path.display()),
-                    )
-                })?;
-                let ext = canonical
+                let ext = path
                     .extension()
                     .and_then(|e| e.to_str())
                     .map(str::to_ascii_lowercase);
@@ -99,7 +93,8 @@ impl Shapes {
                         format!("expected a .{kind} file, found \"{name}\""),
                     ));
                 }
-                Source::File(canonical, el.boolean(ctx, "face_normals")?.unwrap_or(false))
+                let file = NamedFile::new(path, &field("filename"), ctx)?;
+                Source::File(file, el.boolean(ctx, "face_normals")?.unwrap_or(false))
             }
             "rectangle" => Source::Builtin(ShapeKind::Rectangle),
             "cube" => Source::Builtin(ShapeKind::Cube),
@@ -155,8 +150,8 @@ impl Shapes {
                 shapes::build(ShapeKind::Sphere, Some(SPHERE_LEVELS))
             }
             Source::Builtin(kind) => shapes::build(*kind, None),
-            Source::File(path, face_normals) => {
-                let mut mesh = load_mesh(path).map_err(|e| ctx.nested(field, &e))?;
+            Source::File(file, face_normals) => {
+                let mut mesh = load_mesh(&file.path).map_err(|e| ctx.nested(field, &e))?;
                 if *face_normals {
                     mesh.normals.clear();
                 }
