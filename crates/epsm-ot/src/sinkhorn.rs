@@ -47,7 +47,7 @@ mod dual;
 mod pass;
 
 use crate::blocks::Clustered;
-use crate::cost::{diameter_sq, displacement_gradient};
+use crate::cost::{check_spread, diameter_sq, displacement_gradient};
 use crate::error::OtError;
 use crate::plan::{EntropicPlan, Matching, OtResult, PhaseTimes, SolveStats};
 use crate::points::{Point, PointCloud, check_pair};
@@ -294,13 +294,7 @@ pub fn solve(
     check_pair(source, target)?;
     let diam2 = diameter_sq(source, target);
     let eps = settings.blur * settings.blur;
-    if diam2 / eps > MAX_SPREAD {
-        return Err(OtError::SpreadTooLarge {
-            diameter_sq: diam2,
-            eps,
-            limit: MAX_SPREAD,
-        });
-    }
+    check_spread("sinkhorn", diam2, eps, MAX_SPREAD)?;
     let mut phases = PhaseTimes::default();
     let (x, y) = phases.time("cluster", || {
         (
