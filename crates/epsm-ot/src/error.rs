@@ -73,6 +73,17 @@ pub enum OtError {
         /// The largest accepted `extent_sq / unit_sq`.
         limit: f64,
     },
+    /// A solve ended with a NaN or infinite value: the guard at the entropic
+    /// solver's exit, so no non-finite loss, potential or gradient is returned.
+    #[error("the entropic solve ended with a non-finite {quantity}{}", at_point(*index))]
+    NonFiniteResult {
+        /// What was not finite: `loss`, `potential f`, `potential g`,
+        /// `barycentre` or `gradient`.
+        quantity: &'static str,
+        /// The point it belongs to (source order for `f`, barycentres and the
+        /// gradient, target order for `g`); `None` for the loss.
+        index: Option<usize>,
+    },
     /// A source point's row of the entropic plan has no mass (no target
     /// streamed, or no finite kernel score), so its barycentre is undefined.
     #[error("a source point's row of the entropic plan has no finite mass at ε = {eps:e}")]
@@ -89,4 +100,9 @@ fn spread_remedy(matcher: &str) -> &'static str {
         "sliced" => " or move them toward the origin",
         _ => "",
     }
+}
+
+/// ` of point {i}`, or nothing for a quantity of the whole solve.
+fn at_point(index: Option<usize>) -> String {
+    index.map_or_else(String::new, |i| format!(" of point {i}"))
 }

@@ -285,6 +285,8 @@ fn solve_one(
 ///
 /// Fails with [`OtError::SpreadTooLarge`] when the clouds' squared diameter
 /// over `blur²` exceeds [`MAX_SPREAD`].
+/// Never returns a non-finite loss, potential or gradient
+/// ([`OtError::NonFiniteResult`] instead).
 pub fn solve(
     source: &PointCloud,
     target: &PointCloud,
@@ -343,10 +345,85 @@ pub fn solve(
         marginal_error: xy.dual.marginal_error,
     };
     stats.phases = phases;
+    let gradient = displacement_gradient(source, &pull);
+    check_finite(loss, &plan, &gradient)?;
     Ok(OtResult {
         loss,
-        gradient: displacement_gradient(source, &pull),
+        gradient,
         matching: Matching::Entropic(plan),
         stats,
     })
+}
+
+/// The solver's exit guard: [`OtError::NonFiniteResult`] naming the first
+/// NaN or infinite loss, potential, barycentre or gradient entry (one O(n)
+/// pass after the solve).
+///
+/// A softmin row whose sum is zero (no streamed target with a finite score)
+/// gives an infinite potential. The zero sums found reachable (costs beyond
+/// the `f32` range at a large blur) ended in [`OtError::EmptyKernelRow`] at
+/// the barycentres; this guard makes sure no path returns such a potential,
+/// or what follows from it.
+fn check_finite(loss: f64, plan: &EntropicPlan, gradient: &[Point]) -> Result<(), OtError> {
+    let bad = |quantity, index| Err(OtError::NonFiniteResult { quantity, index });
+    if !loss.is_finite() {
+        return bad("loss", None);
+    }
+    let not_finite = |p: &Point| !p.iter().all(|v| v.is_finite());
+    let checks = [
+        ("potential f", plan.f.iter().position(|v| !v.is_finite())),
+        ("potential g", plan.g.iter().position(|v| !v.is_finite())),
+        ("barycentre", plan.barycentres.iter().position(not_finite)),
+        ("gradient", gradient.iter().position(not_finite)),
+    ];
+    match checks.into_iter().find(|(_, index)| index.is_some()) {
+        Some((quantity, index)) => bad(quantity, index),
+        None => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_exit_guard_names_the_first_non_finite_value() {
+        let a = PointCloud::from_points(&[[0.1, 0.2, 0.3, 0.4, 0.5], [0.9, 0.8, 0.7, 0.6, 0.5]])
+            .unwrap_or_else(|e| panic!("{e}"));
+        let b = PointCloud::from_points(&[[0.5, 0.2, 0.3, 0.4, 0.0], [0.1, 0.9, 0.7, 0.6, 0.5]])
+            .unwrap_or_else(|e| panic!("{e}"));
+        let r = solve(&a, &b, &SinkhornSettings::default()).unwrap_or_else(|e| panic!("{e}"));
+        let Matching::Entropic(plan) = &r.matching else {
+            panic!("not an entropic plan");
+        };
+        assert_eq!(check_finite(r.loss, plan, &r.gradient), Ok(()));
+        let expect = |quantity, index| Err(OtError::NonFiniteResult { quantity, index });
+        for bad in [f64::INFINITY, f64::NEG_INFINITY, f64::NAN] {
+            assert_eq!(check_finite(bad, plan, &r.gradient), expect("loss", None));
+            let mut p = plan.clone();
+            p.f[1] = bad;
+            assert_eq!(
+                check_finite(r.loss, &p, &r.gradient),
+                expect("potential f", Some(1))
+            );
+            let mut p = plan.clone();
+            p.g[0] = bad;
+            assert_eq!(
+                check_finite(r.loss, &p, &r.gradient),
+                expect("potential g", Some(0))
+            );
+            let mut p = plan.clone();
+            p.barycentres[1][2] = bad as f32;
+            assert_eq!(
+                check_finite(r.loss, &p, &r.gradient),
+                expect("barycentre", Some(1))
+            );
+            let mut gradient = r.gradient.clone();
+            gradient[1][3] = bad as f32;
+            assert_eq!(
+                check_finite(r.loss, plan, &gradient),
+                expect("gradient", Some(1))
+            );
+        }
+    }
 }
