@@ -67,8 +67,8 @@ pub enum OtError {
         /// the two clouds together (exact, sinkhorn), or the squared norm
         /// bound of their points (sliced, which projects absolute coordinates).
         extent_sq: f64,
-        /// The squared length the extent is measured in: ε = blur² for
-        /// sinkhorn, 1 for the others.
+        /// The squared length the extent is measured in: `min(ε, 1)` with
+        /// ε = blur² for sinkhorn, 1 for the others.
         unit_sq: f64,
         /// The largest accepted `extent_sq / unit_sq`.
         limit: f64,
@@ -96,7 +96,7 @@ pub enum OtError {
 /// What else, besides rescaling, brings clouds back within `matcher`'s range.
 fn spread_remedy(matcher: &str) -> &'static str {
     match matcher {
-        "sinkhorn" => " or raise `sinkhorn.blur`",
+        "sinkhorn" => " or raise `sinkhorn.blur` (if below 1)",
         "sliced" => " or move them toward the origin",
         _ => "",
     }

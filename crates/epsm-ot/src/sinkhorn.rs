@@ -60,13 +60,18 @@ pub(crate) use dual::{Dual, polish, solve_dual};
 /// and still running after 20 s).
 pub const MIN_BLUR: f64 = 1e-4;
 
-/// The largest accepted `diameter² / ε` of a solve ([`OtError::SpreadTooLarge`]).
+/// The largest accepted `diameter² / min(ε, 1)` of a solve ([`OtError::SpreadTooLarge`]).
 ///
-/// The kernel's `f32` scores `log w_j + (g_j − c_ij)/ε` scale with it; the
-/// bound is 8 times below `f32::MAX`, a margin for centred potentials and
-/// their differences exceeding one squared diameter. Without it, clouds
-/// 1e17 apart at the smallest blur (a ratio of 1e42) gave non-finite
-/// potentials and a NaN loss and gradient.
+/// The kernel's `f32` scores `log w_j + (g_j − c_ij)/ε` scale with
+/// `diameter² / ε`, its `f32` costs `c_ij` and differences `g_j − c_ij` with
+/// `diameter²` itself; the bound holds both 8 times below `f32::MAX`, a
+/// margin for centred potentials and their differences exceeding one
+/// squared diameter. Without it, clouds 1e17 apart at the smallest blur (a
+/// ratio of 1e42) gave non-finite potentials and a NaN loss and gradient;
+/// without the `min(ε, 1)`, a large blur let costs overflow: at blur 1e20,
+/// clouds 1e20 apart failed with [`OtError::EmptyKernelRow`] after seconds
+/// of solving, and at blur 1e15, 300 points spread over `[0, 1e19]⁵` gave
+/// a negative `OT_ε` (−4.1e37).
 pub const MAX_SPREAD: f64 = f32::MAX as f64 / 8.0;
 
 /// Settings of the entropic solver, with named presets.
@@ -284,7 +289,7 @@ fn solve_one(
 /// Solves the entropic problem from `source` to `target`.
 ///
 /// Fails with [`OtError::SpreadTooLarge`] when the clouds' squared diameter
-/// over `blur²` exceeds [`MAX_SPREAD`].
+/// over `min(blur², 1)` exceeds [`MAX_SPREAD`].
 /// Never returns a non-finite loss, potential or gradient
 /// ([`OtError::NonFiniteResult`] instead).
 pub fn solve(
@@ -296,7 +301,7 @@ pub fn solve(
     check_pair(source, target)?;
     let diam2 = diameter_sq(source, target);
     let eps = settings.blur * settings.blur;
-    check_spread("sinkhorn", diam2, eps, MAX_SPREAD)?;
+    check_spread("sinkhorn", diam2, eps.min(1.0), MAX_SPREAD)?;
     let mut phases = PhaseTimes::default();
     let (x, y) = phases.time("cluster", || {
         (
@@ -360,10 +365,10 @@ pub fn solve(
 /// pass after the solve).
 ///
 /// A softmin row whose sum is zero (no streamed target with a finite score)
-/// gives an infinite potential. The zero sums found reachable (costs beyond
-/// the `f32` range at a large blur) ended in [`OtError::EmptyKernelRow`] at
-/// the barycentres; this guard makes sure no path returns such a potential,
-/// or what follows from it.
+/// gives an infinite potential. The only such rows found reachable (costs
+/// beyond the `f32` range at a large blur) are now refused by the spread
+/// check ([`MAX_SPREAD`]); this guard makes sure no path returns such a
+/// potential, or what follows from it.
 fn check_finite(loss: f64, plan: &EntropicPlan, gradient: &[Point]) -> Result<(), OtError> {
     let bad = |quantity, index| Err(OtError::NonFiniteResult { quantity, index });
     if !loss.is_finite() {

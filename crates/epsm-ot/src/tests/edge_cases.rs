@@ -251,9 +251,12 @@ fn clouds_too_spread_for_the_kernel_are_a_typed_error() {
     let near = random_cloud(&mut rng, 50, 1.0);
     // (blur, a shift whose diameter²/ε is just inside MAX_SPREAD ≈ 4.3e37,
     // shifts beyond it: 1e42, and the largest f32 coordinates).
+    // At blur ≥ 1 the bound is on diameter² itself: the kernel's f32 costs.
     for (blur, inside, outside) in [
         (crate::MIN_BLUR, 6e14, [1e17, 3e38]),
         (0.01, 6e16, [1e19, 3e38]),
+        (1e10, 6e18, [1e20, 3e38]),
+        (1e20, 6e18, [1e20, 3e38]),
     ] {
         for debias in [false, true] {
             let m = SinkhornSettings {
@@ -278,6 +281,19 @@ fn clouds_too_spread_for_the_kernel_are_a_typed_error() {
             }
         }
     }
+    // Costs beyond f32 for some pairs only: the old code returned Ok, with those
+    // pairs' kernel weights lost (for other clouds like these, a negative OT_ε).
+    let wide = random_cloud(&mut rng, 300, 1e19);
+    let m = SinkhornSettings {
+        blur: 1e15,
+        ..SinkhornSettings::default()
+    };
+    let r = crate::sinkhorn::solve(&wide, &random_cloud(&mut rng, 300, 1e19), &m);
+    assert!(
+        matches!(r, Err(OtError::SpreadTooLarge { .. })),
+        "spread over 1e19 at blur 1e15 gave {:?}",
+        r.map(|r| r.loss)
+    );
 }
 
 #[test]
