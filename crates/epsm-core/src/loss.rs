@@ -10,6 +10,9 @@
 //!   pixel centre over the image size. Rendered and target clouds are matched
 //!   by epsm-ot's exact or entropic solver; `L = 1/n Σ ‖P_i − T_i‖²`.
 //! - **L2**: `L = 1/(3n) Σ (c − c*)²` on linear colours; `g_xy = 0`.
+//!
+//! Both reject a NaN or infinite pixel of either image with
+//! [`epsm_ot::OtError::NonFinite`] naming the pixel (row-major index) and channel.
 //! - **Colour flow** (`flow = true`, [`add_flow`]): adds to each pixel's
 //!   `g_xy` the derivative of the loss when the pixel's content moves
 //!   (needed for camera moves, which shift the whole image).
@@ -22,7 +25,8 @@
 //! | `blur` | point units | 0.01 | > 0 (Sinkhorn only) |
 //! | `flow` | — | `false` | `true`, `false` |
 
-use epsm_ot::{Matcher, PointCloud, SinkhornSettings};
+use epsm_ot::points::AXES;
+use epsm_ot::{Matcher, OtError, PointCloud, SinkhornSettings};
 use epsm_render::Image;
 use glam::{DVec2, Vec2, Vec3};
 
@@ -114,7 +118,7 @@ pub fn evaluate(kind: LossKind, image: &Image, target: &Image, lambda: f64) -> O
     }
     let n = image.pixels.len();
     let matcher = match kind {
-        LossKind::L2 => return Ok(l2(image, target)),
+        LossKind::L2 => return l2(image, target),
         LossKind::OtExact => Matcher::exact(),
         LossKind::OtSinkhorn { blur } => Matcher::Sinkhorn(SinkhornSettings {
             blur,
@@ -191,7 +195,22 @@ pub fn add_flow(image: &Image, eval: &mut LossEval) -> OptResult<()> {
     Ok(())
 }
 
-fn l2(image: &Image, target: &Image) -> LossEval {
+/// Fails with [`OtError::NonFinite`] on the first NaN or infinite channel of
+/// `image` (as the OT points do for a non-finite colour).
+fn check_finite(image: &Image) -> Result<(), OtError> {
+    for (index, c) in image.pixels.iter().enumerate() {
+        for (&axis, value) in AXES.iter().zip(c.to_array()) {
+            if !value.is_finite() {
+                return Err(OtError::NonFinite { index, axis, value });
+            }
+        }
+    }
+    Ok(())
+}
+
+fn l2(image: &Image, target: &Image) -> OptResult<LossEval> {
+    check_finite(image)?;
+    check_finite(target)?;
     let n = image.pixels.len() as f32;
     let mut value = 0.0f64;
     let g_rgb = image
@@ -204,14 +223,14 @@ fn l2(image: &Image, target: &Image) -> LossEval {
             2.0 * d / (3.0 * n)
         })
         .collect();
-    LossEval {
+    Ok(LossEval {
         value: value / (3.0 * f64::from(n)),
         width: image.width,
         height: image.height,
         g_rgb,
         g_xy: vec![DVec2::ZERO; image.pixels.len()],
         matched: None,
-    }
+    })
 }
 
 /// Root-mean-square difference of two images over pixels and channels
@@ -334,24 +353,27 @@ mod tests {
     }
 
     #[test]
-    fn a_non_finite_pixel_fails_the_ot_loss_instead_of_matching_as_black() {
+    fn a_non_finite_pixel_fails_every_loss_naming_the_pixel() {
+        // OT: instead of matching it as black; L2: instead of a NaN loss.
         for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
             assert!(tone_map(bad).is_nan(), "{bad}");
             let mut img = dot(4, 4, (1, 1));
             img.set(2, 3, Vec3::new(0.5, bad, 0.5));
             for (image, target) in [(&img, &dot(4, 4, (2, 2))), (&dot(4, 4, (2, 2)), &img)] {
-                let e = evaluate(LossKind::OtExact, image, target, 1.0);
-                assert!(
-                    matches!(
-                        e,
-                        Err(OptimizeError::Ot(epsm_ot::OtError::NonFinite {
-                            index: 14,
-                            axis: "g",
-                            ..
-                        }))
-                    ),
-                    "{bad}: {e:?}"
-                );
+                for kind in [LossKind::OtExact, LossKind::L2] {
+                    let e = evaluate(kind, image, target, 1.0);
+                    assert!(
+                        matches!(
+                            e,
+                            Err(OptimizeError::Ot(OtError::NonFinite {
+                                index: 14,
+                                axis: "g",
+                                ..
+                            }))
+                        ),
+                        "{kind:?} {bad}: {e:?}"
+                    );
+                }
             }
         }
         assert_eq!(

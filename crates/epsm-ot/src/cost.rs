@@ -5,6 +5,7 @@
 //! entropic one), the loss is `1/n Σ ‖P_i − T_i‖²`-like and the gradient with
 //! respect to `P_i` is `2 (P_i − T_i) / n`.
 
+use crate::error::OtError;
 use crate::points::{DIM, Point, PointCloud};
 
 /// Squared Euclidean distance in `f32`.
@@ -34,6 +35,43 @@ pub fn diameter_sq(source: &PointCloud, target: &PointCloud) -> f64 {
             t * t
         })
         .sum()
+}
+
+/// Squared norm bound of the points of two clouds: `Σ_d max(|lo_d|, |hi_d|)²`
+/// over their joint bounding box, at least the squared norm of every point.
+pub fn radius_sq(source: &PointCloud, target: &PointCloud) -> f64 {
+    let (lo_s, hi_s) = source.bounds();
+    let (lo_t, hi_t) = target.bounds();
+    (0..DIM)
+        .map(|d| {
+            let t = [lo_s[d], hi_s[d], lo_t[d], hi_t[d]]
+                .iter()
+                .fold(0.0f64, |m, &v| m.max(f64::from(v).abs()));
+            t * t
+        })
+        .sum()
+}
+
+/// The range check every matcher makes before solving: fails with
+/// [`OtError::SpreadTooLarge`] when `extent_sq / unit_sq` exceeds `limit`.
+///
+/// Each matcher passes the extent, unit and bound its own `f32` arithmetic
+/// needs (see the error's fields).
+pub(crate) fn check_spread(
+    matcher: &'static str,
+    extent_sq: f64,
+    unit_sq: f64,
+    limit: f64,
+) -> Result<(), OtError> {
+    if extent_sq / unit_sq > limit {
+        return Err(OtError::SpreadTooLarge {
+            matcher,
+            extent_sq,
+            unit_sq,
+            limit,
+        });
+    }
+    Ok(())
 }
 
 /// Mean cost `1/n Σ_i ‖P_i − Q_σ(i)‖²` of an assignment σ, accumulated in `f64`.

@@ -3,7 +3,7 @@
 //! Every public solver entry point validates its input and returns an
 //! [`OtError`] instead of panicking: empty clouds, clouds of different sizes,
 //! ragged coordinate columns, non-finite coordinates, invalid settings, and
-//! clouds the entropic kernel cannot represent.
+//! clouds beyond a matcher's `f32` range.
 
 use thiserror::Error;
 
@@ -51,20 +51,38 @@ pub enum OtError {
         /// The accepted range.
         reason: &'static str,
     },
-    /// The clouds are too spread for the entropic kernel at this blur: its
-    /// `f32` scores, up to a small multiple of `diameter_sq / ε`, would
-    /// overflow.
+    /// The clouds are too large for a matcher's `f32` arithmetic: the squared
+    /// extent that arithmetic scales with, over its unit, exceeds the
+    /// matcher's bound (`sinkhorn::MAX_SPREAD`, `exact::MAX_DIAMETER_SQ`,
+    /// `sliced::max_radius_sq`).
     #[error(
-        "the clouds' squared diameter {diameter_sq:e} over ε = blur² = {eps:e} exceeds {limit:e}, \
-         beyond the entropic kernel's f32 range: rescale the points or raise `sinkhorn.blur`"
+        "the clouds' squared extent {extent_sq:e} over {unit_sq:e} exceeds {limit:e}, \
+         beyond the f32 range of the {matcher} matcher: rescale the points{}",
+        spread_remedy(matcher)
     )]
     SpreadTooLarge {
-        /// Squared diameter of the two clouds together.
-        diameter_sq: f64,
-        /// The final ε, `blur²`.
-        eps: f64,
-        /// The largest accepted `diameter_sq / ε`.
+        /// The matcher: `exact`, `sinkhorn` or `sliced`.
+        matcher: &'static str,
+        /// What the matcher's arithmetic scales with: the squared diameter of
+        /// the two clouds together (exact, sinkhorn), or the squared norm
+        /// bound of their points (sliced, which projects absolute coordinates).
+        extent_sq: f64,
+        /// The squared length the extent is measured in: `min(ε, 1)` with
+        /// ε = blur² for sinkhorn, 1 for the others.
+        unit_sq: f64,
+        /// The largest accepted `extent_sq / unit_sq`.
         limit: f64,
+    },
+    /// A solve ended with a NaN or infinite value: the guard at the entropic
+    /// solver's exit, so no non-finite loss, potential or gradient is returned.
+    #[error("the entropic solve ended with a non-finite {quantity}{}", at_point(*index))]
+    NonFiniteResult {
+        /// What was not finite: `loss`, `potential f`, `potential g`,
+        /// `barycentre` or `gradient`.
+        quantity: &'static str,
+        /// The point it belongs to (source order for `f`, barycentres and the
+        /// gradient, target order for `g`); `None` for the loss.
+        index: Option<usize>,
     },
     /// A source point's row of the entropic plan has no mass (no target
     /// streamed, or no finite kernel score), so its barycentre is undefined.
@@ -73,4 +91,18 @@ pub enum OtError {
         /// The ε of the plan.
         eps: f64,
     },
+}
+
+/// What else, besides rescaling, brings clouds back within `matcher`'s range.
+fn spread_remedy(matcher: &str) -> &'static str {
+    match matcher {
+        "sinkhorn" => " or raise `sinkhorn.blur` (if below 1)",
+        "sliced" => " or move them toward the origin",
+        _ => "",
+    }
+}
+
+/// ` of point {i}`, or nothing for a quantity of the whole solve.
+fn at_point(index: Option<usize>) -> String {
+    index.map_or_else(String::new, |i| format!(" of point {i}"))
 }

@@ -46,12 +46,32 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use crate::blocks::{Clustered, fit_potentials, kept_targets};
-use crate::cost::{diameter_sq, sq_dist_f64};
+use crate::cost::{check_spread, diameter_sq, sq_dist_f64};
 use crate::error::OtError;
 use crate::plan::{OtResult, PhaseTimes, SolveStats};
 use crate::points::{PointCloud, check_pair};
 use crate::sinkhorn::{SinkhornSettings, solve_dual};
 use sparse::SparseAssignment;
+
+/// The largest accepted squared diameter of the two clouds together ([`OtError::SpreadTooLarge`]).
+///
+/// Costs, potentials and the loss are `f64`, finite for any `f32` input
+/// (squared differences of `f32` values stay below 5e77). The gradient
+/// `2 (P_i − Q_σ(i)) / n` is `f32`: `P − Q` is at most the diameter and
+/// `n = 1` doubles it, so it is finite below a diameter of `f32::MAX / 2`;
+/// the bound, `f32::MAX / 4`, leaves a factor 2 for rounding. Without it a
+/// single point 3e38 from its partner got an infinite gradient.
+pub const MAX_DIAMETER_SQ: f64 = (f32::MAX as f64 / 4.0) * (f32::MAX as f64 / 4.0);
+
+/// The clouds' squared diameter, or [`OtError::SpreadTooLarge`] beyond [`MAX_DIAMETER_SQ`].
+pub(crate) fn checked_diameter_sq(
+    source: &PointCloud,
+    target: &PointCloud,
+) -> Result<f64, OtError> {
+    let diam2 = diameter_sq(source, target);
+    check_spread("exact", diam2, 1.0, MAX_DIAMETER_SQ)?;
+    Ok(diam2)
+}
 
 /// Settings of the exact solver.
 #[derive(Debug, Clone, PartialEq)]
@@ -132,6 +152,9 @@ impl ExactSettings {
 }
 
 /// Solves the exact assignment problem from `source` to `target`.
+///
+/// Fails with [`OtError::SpreadTooLarge`] when the clouds' squared diameter
+/// exceeds [`MAX_DIAMETER_SQ`].
 pub fn solve(
     source: &PointCloud,
     target: &PointCloud,
@@ -142,6 +165,7 @@ pub fn solve(
     if n < settings.dense_below.max(2) {
         return dense::solve(source, target);
     }
+    let diam2 = checked_diameter_sq(source, target)?;
     let mut phases = PhaseTimes::default();
     let (x, y) = phases.time("cluster", || {
         (
@@ -149,7 +173,7 @@ pub fn solve(
             Clustered::new(target, settings.warm_start.cluster_size),
         )
     });
-    let mut solved = solve_sorted(&x, &y, diameter_sq(source, target), settings);
+    let mut solved = solve_sorted(&x, &y, diam2, settings);
     phases.merge(&solved.stats.phases);
     solved.stats.phases = phases;
     let mut perm = vec![0usize; n];

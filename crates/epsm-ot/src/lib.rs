@@ -12,6 +12,8 @@
 //!   scaled by the user's λ (the weight of position against colour).
 //!   Stored as five SoA columns in a [`PointCloud`]. Clouds are non-empty,
 //!   finite, and matched only when of equal size; every point has mass `1/n`.
+//!   Each matcher refuses clouds beyond the range of its `f32` arithmetic
+//!   ([`OtError::SpreadTooLarge`]).
 //! - **Cost**: `c(P, Q) = ‖P − Q‖²`, the squared Euclidean distance in 5-D.
 //! - **Loss**: exact: `L = 1/n Σ_i ‖P_i − Q_σ(i)‖²` for the optimal permutation σ;
 //!   entropic: `OT_ε` (or the debiased `S_ε`), see [`sinkhorn`]; sliced: see [`sliced`].

@@ -47,7 +47,7 @@ mod dual;
 mod pass;
 
 use crate::blocks::Clustered;
-use crate::cost::{diameter_sq, displacement_gradient};
+use crate::cost::{check_spread, diameter_sq, displacement_gradient};
 use crate::error::OtError;
 use crate::plan::{EntropicPlan, Matching, OtResult, PhaseTimes, SolveStats};
 use crate::points::{Point, PointCloud, check_pair};
@@ -60,13 +60,18 @@ pub(crate) use dual::{Dual, polish, solve_dual};
 /// and still running after 20 s).
 pub const MIN_BLUR: f64 = 1e-4;
 
-/// The largest accepted `diameter² / ε` of a solve ([`OtError::SpreadTooLarge`]).
+/// The largest accepted `diameter² / min(ε, 1)` of a solve ([`OtError::SpreadTooLarge`]).
 ///
-/// The kernel's `f32` scores `log w_j + (g_j − c_ij)/ε` scale with it; the
-/// bound is 8 times below `f32::MAX`, a margin for centred potentials and
-/// their differences exceeding one squared diameter. Without it, clouds
-/// 1e17 apart at the smallest blur (a ratio of 1e42) gave non-finite
-/// potentials and a NaN loss and gradient.
+/// The kernel's `f32` scores `log w_j + (g_j − c_ij)/ε` scale with
+/// `diameter² / ε`, its `f32` costs `c_ij` and differences `g_j − c_ij` with
+/// `diameter²` itself; the bound holds both 8 times below `f32::MAX`, a
+/// margin for centred potentials and their differences exceeding one
+/// squared diameter. Without it, clouds 1e17 apart at the smallest blur (a
+/// ratio of 1e42) gave non-finite potentials and a NaN loss and gradient;
+/// without the `min(ε, 1)`, a large blur let costs overflow: at blur 1e20,
+/// clouds 1e20 apart failed with [`OtError::EmptyKernelRow`] after seconds
+/// of solving, and at blur 1e15, 300 points spread over `[0, 1e19]⁵` gave
+/// a negative `OT_ε` (−4.1e37).
 pub const MAX_SPREAD: f64 = f32::MAX as f64 / 8.0;
 
 /// Settings of the entropic solver, with named presets.
@@ -284,7 +289,9 @@ fn solve_one(
 /// Solves the entropic problem from `source` to `target`.
 ///
 /// Fails with [`OtError::SpreadTooLarge`] when the clouds' squared diameter
-/// over `blur²` exceeds [`MAX_SPREAD`].
+/// over `min(blur², 1)` exceeds [`MAX_SPREAD`].
+/// Never returns a non-finite loss, potential or gradient
+/// ([`OtError::NonFiniteResult`] instead).
 pub fn solve(
     source: &PointCloud,
     target: &PointCloud,
@@ -294,13 +301,7 @@ pub fn solve(
     check_pair(source, target)?;
     let diam2 = diameter_sq(source, target);
     let eps = settings.blur * settings.blur;
-    if diam2 / eps > MAX_SPREAD {
-        return Err(OtError::SpreadTooLarge {
-            diameter_sq: diam2,
-            eps,
-            limit: MAX_SPREAD,
-        });
-    }
+    check_spread("sinkhorn", diam2, eps.min(1.0), MAX_SPREAD)?;
     let mut phases = PhaseTimes::default();
     let (x, y) = phases.time("cluster", || {
         (
@@ -349,10 +350,85 @@ pub fn solve(
         marginal_error: xy.dual.marginal_error,
     };
     stats.phases = phases;
+    let gradient = displacement_gradient(source, &pull);
+    check_finite(loss, &plan, &gradient)?;
     Ok(OtResult {
         loss,
-        gradient: displacement_gradient(source, &pull),
+        gradient,
         matching: Matching::Entropic(plan),
         stats,
     })
+}
+
+/// The solver's exit guard: [`OtError::NonFiniteResult`] naming the first
+/// NaN or infinite loss, potential, barycentre or gradient entry (one O(n)
+/// pass after the solve).
+///
+/// A softmin row whose sum is zero (no streamed target with a finite score)
+/// gives an infinite potential. The only such rows found reachable (costs
+/// beyond the `f32` range at a large blur) are now refused by the spread
+/// check ([`MAX_SPREAD`]); this guard makes sure no path returns such a
+/// potential, or what follows from it.
+fn check_finite(loss: f64, plan: &EntropicPlan, gradient: &[Point]) -> Result<(), OtError> {
+    let bad = |quantity, index| Err(OtError::NonFiniteResult { quantity, index });
+    if !loss.is_finite() {
+        return bad("loss", None);
+    }
+    let not_finite = |p: &Point| !p.iter().all(|v| v.is_finite());
+    let checks = [
+        ("potential f", plan.f.iter().position(|v| !v.is_finite())),
+        ("potential g", plan.g.iter().position(|v| !v.is_finite())),
+        ("barycentre", plan.barycentres.iter().position(not_finite)),
+        ("gradient", gradient.iter().position(not_finite)),
+    ];
+    match checks.into_iter().find(|(_, index)| index.is_some()) {
+        Some((quantity, index)) => bad(quantity, index),
+        None => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_exit_guard_names_the_first_non_finite_value() {
+        let a = PointCloud::from_points(&[[0.1, 0.2, 0.3, 0.4, 0.5], [0.9, 0.8, 0.7, 0.6, 0.5]])
+            .unwrap_or_else(|e| panic!("{e}"));
+        let b = PointCloud::from_points(&[[0.5, 0.2, 0.3, 0.4, 0.0], [0.1, 0.9, 0.7, 0.6, 0.5]])
+            .unwrap_or_else(|e| panic!("{e}"));
+        let r = solve(&a, &b, &SinkhornSettings::default()).unwrap_or_else(|e| panic!("{e}"));
+        let Matching::Entropic(plan) = &r.matching else {
+            panic!("not an entropic plan");
+        };
+        assert_eq!(check_finite(r.loss, plan, &r.gradient), Ok(()));
+        let expect = |quantity, index| Err(OtError::NonFiniteResult { quantity, index });
+        for bad in [f64::INFINITY, f64::NEG_INFINITY, f64::NAN] {
+            assert_eq!(check_finite(bad, plan, &r.gradient), expect("loss", None));
+            let mut p = plan.clone();
+            p.f[1] = bad;
+            assert_eq!(
+                check_finite(r.loss, &p, &r.gradient),
+                expect("potential f", Some(1))
+            );
+            let mut p = plan.clone();
+            p.g[0] = bad;
+            assert_eq!(
+                check_finite(r.loss, &p, &r.gradient),
+                expect("potential g", Some(0))
+            );
+            let mut p = plan.clone();
+            p.barycentres[1][2] = bad as f32;
+            assert_eq!(
+                check_finite(r.loss, &p, &r.gradient),
+                expect("barycentre", Some(1))
+            );
+            let mut gradient = r.gradient.clone();
+            gradient[1][3] = bad as f32;
+            assert_eq!(
+                check_finite(r.loss, plan, &gradient),
+                expect("gradient", Some(1))
+            );
+        }
+    }
 }

@@ -15,7 +15,7 @@
 
 use rayon::prelude::*;
 
-use crate::cost::displacement_gradient;
+use crate::cost::{check_spread, displacement_gradient, radius_sq};
 use crate::error::OtError;
 use crate::plan::{Matching, OtResult, SlicedPlan, SolveStats};
 use crate::points::{DIM, Point, PointCloud, check_pair};
@@ -37,6 +37,22 @@ impl Default for SlicedSettings {
             seed: 0,
         }
     }
+}
+
+/// The largest accepted squared norm bound of the points ([`crate::cost::radius_sq`])
+/// for `projections` directions ([`OtError::SpreadTooLarge`]).
+///
+/// With `R` the largest point norm and unit directions θ, the `f32`
+/// arithmetic holds: projections `|⟨P, θ⟩| ≤ R`, displacements `|d| ≤ 2R`,
+/// the per-point sum `Σ_θ d θ_c` over `K` directions (before its `5/K`
+/// scale) at most `2KR`, the target `P − (5/K) Σ_θ d θ` at most `11R` and
+/// the gradient `2 (P − T) / n` at most `24R`: everything stays below
+/// `2 max(K, 12) R`. The bound keeps that a factor 2 below `f32::MAX`, for
+/// rounding. (The loss is summed in `f64`.) Without it, clouds 3e38 apart got
+/// an infinite gradient, and clouds together near 3e38 a NaN loss.
+pub fn max_radius_sq(projections: usize) -> f64 {
+    let radius = f64::from(f32::MAX) / (4.0 * projections.max(12) as f64);
+    radius * radius
 }
 
 fn direction(rng: &mut Rng) -> [f32; DIM] {
@@ -64,6 +80,9 @@ fn sorted_projection(cloud: &PointCloud, theta: &[f32; DIM]) -> (Vec<f32>, Vec<u
 }
 
 /// Solves the sliced problem from `source` to `target`.
+///
+/// Fails with [`OtError::SpreadTooLarge`] when the points' squared norm bound
+/// exceeds [`max_radius_sq`].
 pub fn solve(
     source: &PointCloud,
     target: &PointCloud,
@@ -77,6 +96,12 @@ pub fn solve(
             reason: "must be at least 1",
         });
     }
+    check_spread(
+        "sliced",
+        radius_sq(source, target),
+        1.0,
+        max_radius_sq(settings.projections),
+    )?;
     let mut rng = Rng::new(settings.seed);
     let thetas: Vec<[f32; DIM]> = (0..settings.projections)
         .map(|_| direction(&mut rng))

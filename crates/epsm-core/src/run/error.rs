@@ -12,7 +12,8 @@ pub enum OptimizeError {
     /// A parameter key does not fit the scene.
     #[error(transparent)]
     Param(#[from] crate::Error),
-    /// The matching failed.
+    /// The matching failed, or an image given to a loss (L2 too) holds a
+    /// NaN or infinite pixel ([`epsm_ot::OtError::NonFinite`]).
     #[error("optimal transport: {0}")]
     Ot(#[from] epsm_ot::OtError),
     /// Reading or writing a run file failed.

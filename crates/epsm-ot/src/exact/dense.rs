@@ -84,8 +84,11 @@ pub fn solve_matrix(cost: &[f64], n: usize) -> Assignment {
 }
 
 /// Exact matching through the dense matrix (reference; O(n²) memory, O(n³) time).
+///
+/// Fails like `exact::solve` on clouds beyond [`super::MAX_DIAMETER_SQ`].
 pub fn solve(source: &PointCloud, target: &PointCloud) -> Result<OtResult, OtError> {
     let n = check_pair(source, target)?;
+    super::checked_diameter_sq(source, target)?;
     let cost: Vec<f64> = source
         .points()
         .flat_map(|p| target.points().map(move |q| sq_dist_f64(&p, &q)))

@@ -251,9 +251,12 @@ fn clouds_too_spread_for_the_kernel_are_a_typed_error() {
     let near = random_cloud(&mut rng, 50, 1.0);
     // (blur, a shift whose diameter²/ε is just inside MAX_SPREAD ≈ 4.3e37,
     // shifts beyond it: 1e42, and the largest f32 coordinates).
+    // At blur ≥ 1 the bound is on diameter² itself: the kernel's f32 costs.
     for (blur, inside, outside) in [
         (crate::MIN_BLUR, 6e14, [1e17, 3e38]),
         (0.01, 6e16, [1e19, 3e38]),
+        (1e10, 6e18, [1e20, 3e38]),
+        (1e20, 6e18, [1e20, 3e38]),
     ] {
         for debias in [false, true] {
             let m = SinkhornSettings {
@@ -278,4 +281,73 @@ fn clouds_too_spread_for_the_kernel_are_a_typed_error() {
             }
         }
     }
+    // Costs beyond f32 for some pairs only: the old code returned Ok, with those
+    // pairs' kernel weights lost (for other clouds like these, a negative OT_ε).
+    let wide = random_cloud(&mut rng, 300, 1e19);
+    let m = SinkhornSettings {
+        blur: 1e15,
+        ..SinkhornSettings::default()
+    };
+    let r = crate::sinkhorn::solve(&wide, &random_cloud(&mut rng, 300, 1e19), &m);
+    assert!(
+        matches!(r, Err(OtError::SpreadTooLarge { .. })),
+        "spread over 1e19 at blur 1e15 gave {:?}",
+        r.map(|r| r.loss)
+    );
+}
+
+#[test]
+fn exact_and_sliced_refuse_clouds_beyond_their_f32_range() {
+    let mut rng = Rng::new(7);
+    // 1, 2 and 50 points take the dense exact path, 100 the sparse one.
+    for n in [1, 2, 50, 100] {
+        let near = random_cloud(&mut rng, n, 1.0);
+        for m in [Matcher::exact(), Matcher::sliced()] {
+            // A pure translation: the mean x gradient is −2 shift / n (sliced: approximately).
+            let tolerance = if matches!(m, Matcher::Sliced(_)) {
+                0.25
+            } else {
+                1e-3
+            };
+            for shift in [1e17, 1e20] {
+                let far = translated(&near, [0.0, 0.0, 0.0, shift, 0.0]);
+                let r = m.solve(&near, &far).unwrap_or_else(|e| panic!("{e}"));
+                let mean_x = r.gradient.iter().map(|g| f64::from(g[3])).sum::<f64>() / n as f64;
+                let expected = -2.0 * f64::from(shift) / n as f64;
+                assert!(
+                    all_finite(&r) && (mean_x / expected - 1.0).abs() < tolerance,
+                    "{} n {n}: shift {shift:e}, mean x gradient {mean_x:e}",
+                    m.name()
+                );
+            }
+            let far = translated(&near, [0.0, 0.0, 0.0, 3e38, 0.0]);
+            let r = m.solve(&near, &far);
+            assert!(
+                matches!(r, Err(OtError::SpreadTooLarge { matcher, .. }) if matcher == m.name()),
+                "{} n {n}: shift 3e38 gave {r:?}",
+                m.name()
+            );
+        }
+    }
+    // Sliced projects absolute coordinates: two small clouds together near 3e38 too.
+    let near = random_cloud(&mut rng, 10, 1.0);
+    let (a, b) = (
+        translated(&near, [3e38; 5]),
+        translated(&near, [3e38, 3e38, 3e38, 3e38, 2.9e38]),
+    );
+    let r = Matcher::sliced().solve(&a, &b);
+    assert!(
+        matches!(
+            r,
+            Err(OtError::SpreadTooLarge {
+                matcher: "sliced",
+                ..
+            })
+        ),
+        "sliced near 3e38 gave {r:?}"
+    );
+    let r = Matcher::exact()
+        .solve(&a, &b)
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert!(all_finite(&r), "exact near 3e38: {r:?}");
 }
