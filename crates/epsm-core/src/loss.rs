@@ -12,7 +12,8 @@
 //! - **L2**: `L = 1/(3n) Σ (c − c*)²` on linear colours; `g_xy = 0`.
 //!
 //! Both reject a NaN or infinite pixel of either image with
-//! [`epsm_ot::OtError::NonFinite`] naming the pixel (row-major index) and channel.
+//! [`OptimizeError::NonFinitePixel`] naming the image, the pixel and the
+//! channel.
 //! - **Colour flow** (`flow = true`, [`add_flow`]): adds to each pixel's
 //!   `g_xy` the derivative of the loss when the pixel's content moves
 //!   (needed for camera moves, which shift the whole image).
@@ -25,8 +26,7 @@
 //! | `blur` | point units | 0.01 | > 0 (Sinkhorn only) |
 //! | `flow` | — | `false` | `true`, `false` |
 
-use epsm_ot::points::AXES;
-use epsm_ot::{Matcher, OtError, PointCloud, SinkhornSettings};
+use epsm_ot::{Matcher, PointCloud, SinkhornSettings};
 use epsm_render::Image;
 use glam::{DVec2, Vec2, Vec3};
 
@@ -74,9 +74,9 @@ pub struct LossEval {
 /// (negative colours map to 0).
 ///
 /// A non-finite colour (NaN, ±∞) is not a colour: it maps to NaN, which
-/// [`PointCloud`] construction rejects, so [`points`] and [`evaluate`] fail
-/// with [`epsm_ot::OtError::NonFinite`] naming the pixel instead of matching
-/// it as black.
+/// [`PointCloud`] construction rejects, so [`points`] fails with
+/// [`epsm_ot::OtError::NonFinite`] naming the point instead of matching it
+/// as black ([`evaluate`] rejects such images before, by pixel).
 pub fn tone_map(c: f32) -> f32 {
     if !c.is_finite() {
         return f32::NAN;
@@ -116,9 +116,11 @@ pub fn evaluate(kind: LossKind, image: &Image, target: &Image, lambda: f64) -> O
             image.width, image.height, target.width, target.height
         )));
     }
+    check_finite(image, "rendered image")?;
+    check_finite(target, "target")?;
     let n = image.pixels.len();
     let matcher = match kind {
-        LossKind::L2 => return l2(image, target),
+        LossKind::L2 => return Ok(l2(image, target)),
         LossKind::OtExact => Matcher::exact(),
         LossKind::OtSinkhorn { blur } => Matcher::Sinkhorn(SinkhornSettings {
             blur,
@@ -195,22 +197,27 @@ pub fn add_flow(image: &Image, eval: &mut LossEval) -> OptResult<()> {
     Ok(())
 }
 
-/// Fails with [`OtError::NonFinite`] on the first NaN or infinite channel of
-/// `image` (as the OT points do for a non-finite colour).
-fn check_finite(image: &Image) -> Result<(), OtError> {
-    for (index, c) in image.pixels.iter().enumerate() {
-        for (&axis, value) in AXES.iter().zip(c.to_array()) {
+/// Fails with [`OptimizeError::NonFinitePixel`] on the first NaN or infinite
+/// channel of `image` (named `which` in the error).
+fn check_finite(image: &Image, which: &'static str) -> OptResult<()> {
+    for (i, c) in image.pixels.iter().enumerate() {
+        for (channel, value) in ["r", "g", "b"].into_iter().zip(c.to_array()) {
             if !value.is_finite() {
-                return Err(OtError::NonFinite { index, axis, value });
+                let i = i as u32;
+                return Err(OptimizeError::NonFinitePixel {
+                    image: which,
+                    x: i % image.width,
+                    y: i / image.width,
+                    channel,
+                    value,
+                });
             }
         }
     }
     Ok(())
 }
 
-fn l2(image: &Image, target: &Image) -> OptResult<LossEval> {
-    check_finite(image)?;
-    check_finite(target)?;
+fn l2(image: &Image, target: &Image) -> LossEval {
     let n = image.pixels.len() as f32;
     let mut value = 0.0f64;
     let g_rgb = image
@@ -223,14 +230,14 @@ fn l2(image: &Image, target: &Image) -> OptResult<LossEval> {
             2.0 * d / (3.0 * n)
         })
         .collect();
-    Ok(LossEval {
+    LossEval {
         value: value / (3.0 * f64::from(n)),
         width: image.width,
         height: image.height,
         g_rgb,
         g_xy: vec![DVec2::ZERO; image.pixels.len()],
         matched: None,
-    })
+    }
 }
 
 /// Root-mean-square difference of two images over pixels and channels
@@ -359,22 +366,35 @@ mod tests {
             assert!(tone_map(bad).is_nan(), "{bad}");
             let mut img = dot(4, 4, (1, 1));
             img.set(2, 3, Vec3::new(0.5, bad, 0.5));
-            for (image, target) in [(&img, &dot(4, 4, (2, 2))), (&dot(4, 4, (2, 2)), &img)] {
+            let dot2 = dot(4, 4, (2, 2));
+            for (image, target, which) in [(&img, &dot2, "rendered image"), (&dot2, &img, "target")]
+            {
                 for kind in [LossKind::OtExact, LossKind::L2] {
                     let e = evaluate(kind, image, target, 1.0);
                     assert!(
                         matches!(
                             e,
-                            Err(OptimizeError::Ot(OtError::NonFinite {
-                                index: 14,
-                                axis: "g",
+                            Err(OptimizeError::NonFinitePixel {
+                                image,
+                                x: 2,
+                                y: 3,
+                                channel: "g",
                                 ..
-                            }))
+                            }) if image == which
                         ),
                         "{kind:?} {bad}: {e:?}"
                     );
                 }
             }
+            // The OT points alone still refuse it, by point.
+            assert!(matches!(
+                points(&img, 1.0),
+                Err(OptimizeError::Ot(epsm_ot::OtError::NonFinite {
+                    index: 14,
+                    axis: "g",
+                    ..
+                }))
+            ));
         }
         assert_eq!(
             (tone_map(-1.0), tone_map(1.0), tone_map(f32::MAX)),

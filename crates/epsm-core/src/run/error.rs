@@ -12,10 +12,23 @@ pub enum OptimizeError {
     /// A parameter key does not fit the scene.
     #[error(transparent)]
     Param(#[from] crate::Error),
-    /// The matching failed, or an image given to a loss (L2 too) holds a
-    /// NaN or infinite pixel ([`epsm_ot::OtError::NonFinite`]).
+    /// The matching failed.
     #[error("optimal transport: {0}")]
     Ot(#[from] epsm_ot::OtError),
+    /// An image given to a loss holds a NaN or infinite value.
+    #[error("loss: the {image} has a non-finite `{channel}` value ({value}) at pixel ({x}, {y})")]
+    NonFinitePixel {
+        /// Which image: "rendered image" or "target".
+        image: &'static str,
+        /// Column, from the left.
+        x: u32,
+        /// Row, from the top.
+        y: u32,
+        /// The channel: `r`, `g` or `b`.
+        channel: &'static str,
+        /// The value.
+        value: f32,
+    },
     /// Reading or writing a run file failed.
     #[error("{}: {message}", path.display())]
     File {
