@@ -116,19 +116,33 @@ pub(super) fn weight_rate(
         return Ok(0.0);
     };
     let eta = f64::from(eta_of(lobe, eta, cos, material));
+    let w = lobe_fresnel(lobe, cos, eta)?;
+    Ok(w.d_cos / w.f * cos.signum() * dcos)
+}
+
+/// The Fresnel factor of a dielectric's delta `lobe` at signed `cos` and
+/// relative IOR `eta`, with its rates: `F` for reflection, `1 − F` for
+/// transmission (whose `1/η²` is the caller's). Fails with
+/// [`DropReason::TotalInternalReflection`] when `cos` is [`near_critical`]
+/// or the factor vanishes, where `ln` of it has no derivative to take.
+pub(super) fn lobe_fresnel(lobe: Lobe, cos: f64, eta: f64) -> Result<FresnelRates, DropReason> {
     if near_critical(eta, cos) {
         return Err(DropReason::TotalInternalReflection);
     }
-    let FresnelRates { f, d_cos, .. } = fresnel_dielectric_rates(cos.abs().min(1.0), eta);
-    let (w, dw) = if lobe.is_transmission() {
-        (1.0 - f, -d_cos)
+    let r = fresnel_dielectric_rates(cos.abs().min(1.0), eta);
+    let w = if lobe.is_transmission() {
+        FresnelRates {
+            f: 1.0 - r.f,
+            d_cos: -r.d_cos,
+            d_eta: -r.d_eta,
+        }
     } else {
-        (f, d_cos)
+        r
     };
-    if w <= 0.0 {
+    if w.f <= 0.0 {
         return Err(DropReason::TotalInternalReflection);
     }
-    Ok(dw / w * cos.signum() * dcos)
+    Ok(w)
 }
 
 /// Whether `|cos|` lies within `1e-3·max(|cos|, 1e-2)` of the critical

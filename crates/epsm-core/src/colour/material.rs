@@ -12,11 +12,10 @@
 //! The refracted direction's change with `ior` moves the chain: that is a
 //! position effect, differentiated through `dp/dθ`.
 
-use epsm_render::materials::fresnel::{FresnelRates, fresnel_dielectric_rates};
 use epsm_render::materials::{Bsdf, Lobe, Material, Texture};
 use glam::{Vec2, Vec3};
 
-use super::chain::near_critical;
+use super::chain::lobe_fresnel;
 use crate::drops::DropReason;
 use crate::params::Target;
 
@@ -85,7 +84,7 @@ impl Probe {
     /// `∂ ln w/∂θ` of a delta lobe's weight `w` for local `wi`, from the
     /// analytic `∂F/∂η` in `f64` (0 unless θ is this dielectric's IOR).
     /// Fails with [`DropReason::TotalInternalReflection`] when the weight
-    /// vanishes or `wi` is [`near_critical`].
+    /// vanishes or `wi` is [`near_critical`](super::chain::near_critical).
     pub(super) fn delta_ratio(&self, wi: Vec3, lobe: Lobe) -> Result<Vec3, DropReason> {
         let Some(ior) = self.ior else {
             return Ok(Vec3::ZERO);
@@ -97,18 +96,12 @@ impl Probe {
         } else {
             (1.0 / ior, -1.0 / (ior * ior))
         };
-        if near_critical(eta, cos) {
-            return Err(DropReason::TotalInternalReflection);
-        }
-        let FresnelRates { f, d_eta, .. } = fresnel_dielectric_rates(cos.abs().min(1.0), eta);
-        let (w, rate) = if lobe.is_transmission() {
-            (1.0 - f, -d_eta / (1.0 - f) - 2.0 / eta)
+        let w = lobe_fresnel(lobe, cos, eta)?;
+        let rate = if lobe.is_transmission() {
+            w.d_eta / w.f - 2.0 / eta
         } else {
-            (f, d_eta / f)
+            w.d_eta / w.f
         };
-        if w <= 0.0 {
-            return Err(DropReason::TotalInternalReflection);
-        }
         Ok(Vec3::splat((rate * deta) as f32))
     }
 }
