@@ -65,7 +65,7 @@ pub fn run(args: &ManifoldBenchArgs) -> anyhow::Result<()> {
         "--seconds must be a positive number, got {}",
         args.seconds
     );
-    anyhow::ensure!(args.threads != Some(0), "--threads must be at least 1");
+    super::check_threads(args.threads)?;
     for path in &args.scenes {
         let scene = load_scene(path)?;
         let mut table = ParamTable::new(&scene);

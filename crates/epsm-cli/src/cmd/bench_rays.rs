@@ -93,7 +93,7 @@ pub fn run(args: &RaysBenchArgs) -> anyhow::Result<()> {
         "--rays must be in [1, {MAX_RAYS}], got {}",
         args.rays
     );
-    anyhow::ensure!(args.threads != Some(0), "--threads must be at least 1");
+    super::check_threads(args.threads)?;
     anyhow::ensure!(args.repeat >= 1, "--repeat must be at least 1");
     let mesh = Arc::new(scene::bumpy_sphere(args.triangles));
     let objects = scene::scene(&mesh);

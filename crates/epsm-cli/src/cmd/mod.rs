@@ -17,12 +17,18 @@ pub fn with_threads<T: Send>(
     threads: Option<usize>,
     f: impl FnOnce() -> T + Send,
 ) -> anyhow::Result<T> {
+    check_threads(threads)?;
     let mut builder = rayon::ThreadPoolBuilder::new();
     if let Some(n) = threads {
-        anyhow::ensure!(n >= 1, "--threads must be at least 1");
         builder = builder.num_threads(n);
     }
     Ok(builder.build()?.install(f))
+}
+
+/// The `--threads` check: a count, if given, of at least 1.
+pub fn check_threads(threads: Option<usize>) -> anyhow::Result<()> {
+    anyhow::ensure!(threads != Some(0), "--threads must be at least 1");
+    Ok(())
 }
 
 /// Peak resident set size of this process in MB (`VmHWM` in
