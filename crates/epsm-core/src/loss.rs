@@ -10,20 +10,20 @@
 //!   pixel centre over the image size. Rendered and target clouds are matched
 //!   by epsm-ot's exact or entropic solver; `L = 1/n Σ ‖P_i − T_i‖²`.
 //! - **L2**: `L = 1/(3n) Σ (c − c*)²` on linear colours; `g_xy = 0`.
-//!
-//! Both reject a NaN or infinite pixel of either image with
-//! [`OptimizeError::NonFinitePixel`] naming the image, the pixel and the
-//! channel.
 //! - **Colour flow** (`flow = true`, [`add_flow`]): adds to each pixel's
 //!   `g_xy` the derivative of the loss when the pixel's content moves
 //!   (needed for camera moves, which shift the whole image).
+//!
+//! Both losses reject a NaN or infinite pixel of either image with
+//! [`OptimizeError::NonFinitePixel`] naming the image, the pixel and the
+//! channel.
 //!
 //! | key (`[loss]`) | unit | default | range |
 //! |---|---|---|---|
 //! | `kind` | — | `ot_exact` | `ot_exact`, `ot_sinkhorn`, `l2` |
 //! | `lambda` | — | 1 | > 0 |
 //! | `match_resolution` | pixels | `[64, 64]` | each in [4, 512] |
-//! | `blur` | point units | 0.01 | > 0 (Sinkhorn only) |
+//! | `blur` | point units | 0.01 | ≥ 1e-4 (Sinkhorn only) |
 //! | `flow` | — | `false` | `true`, `false` |
 
 use epsm_ot::{Matcher, PointCloud, SinkhornSettings};
