@@ -215,6 +215,10 @@ fn counts_outside_their_range_are_errors_before_any_work() {
             "--rays must be in [1, 33554432], got 4000000000000",
         ),
         (
+            vec!["bench", "rays", "--scene", scene, "--spp", "0"],
+            "--spp must be in [1, 4096], got 0",
+        ),
+        (
             vec!["bench", "ot", "--n", "4000000000"],
             "--n must be in [1, 4194304], got 4000000000",
         ),
@@ -233,4 +237,57 @@ fn counts_outside_their_range_are_errors_before_any_work() {
         assert!(stderr.contains(expected), "{args:?}: {stderr}");
     }
     assert!(!dir.exists(), "grad wrote {out} before rejecting --spp 0");
+}
+
+#[test]
+fn bench_rays_on_a_scene_walks_the_rays_of_its_render() {
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/tiny-box.toml");
+    let scene = scene.to_str().expect("utf-8");
+    let run = epsm(&[
+        "bench",
+        "rays",
+        "--scene",
+        scene,
+        "--spp",
+        "2",
+        "--threads",
+        "1",
+        "--repeat",
+        "1",
+        "--json",
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let report: serde_json::Value = serde_json::from_slice(&run.stdout).expect("one JSON object");
+    assert_eq!(report["scene"], scene);
+    assert_eq!(report["spp"], 2);
+    assert!(report.get("tlas_update_seconds").is_none());
+    let rows = report["throughput"].as_array().expect("throughput rows");
+    let row = |name: &str| {
+        rows.iter()
+            .find(|r| r["rays"] == name)
+            .unwrap_or_else(|| panic!("no {name} row in {report}"))
+    };
+    // 32 × 32 pixels at 2 spp: one camera ray per sample.
+    assert_eq!(row("camera")["count"], 2048);
+    assert_eq!(row("camera")["query"], "closest");
+    assert_eq!(row("shadow")["query"], "occluded");
+    for name in ["camera", "bounce", "shadow"] {
+        let r = row(name);
+        assert_eq!(r["threads"], 1);
+        assert!(r["count"].as_u64().expect("count") > 0, "{r}");
+        assert!(r["mrays_per_s"].as_f64().expect("rate") > 0.0, "{r}");
+        let hit = r["hit_fraction"].as_f64().expect("hit fraction");
+        assert!((0.0..=1.0).contains(&hit), "{r}");
+    }
+    // Seen from above, the floor and the box fill most of the view.
+    assert!(
+        row("camera")["hit_fraction"]
+            .as_f64()
+            .expect("hit fraction")
+            > 0.9
+    );
 }

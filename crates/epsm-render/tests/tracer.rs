@@ -6,7 +6,7 @@ use std::path::Path;
 use epsm_render::Scene;
 use epsm_render::record::{RecordLevel, SampleDrop};
 use epsm_render::scene::load::parts_from_str;
-use epsm_render::tracer::{RenderOptions, render, render_recorded};
+use epsm_render::tracer::{RenderOptions, render, render_logged, render_recorded};
 use epsm_testkit::scenes::{OVERFLOWING_LIGHT, OVERHEAD_CAMERA, WALL_BESIDE_THE_LIGHT};
 use glam::{UVec2, Vec3};
 
@@ -396,4 +396,45 @@ fn a_blocked_connection_whose_strength_is_not_finite_is_marked_and_holds_zero() 
             "{level:?}"
         );
     }
+}
+
+#[test]
+fn logging_rays_does_not_change_the_image_and_logs_every_ray_the_render_counts() {
+    let s = shipped("caustic-box.toml");
+    let o = RenderOptions {
+        spp: 2,
+        ..RenderOptions::from_scene(&s)
+    };
+    let plain = render(&s, &o, &|_| {});
+    let (logged, log) = render_logged(&s, &o, &|_| {});
+    assert_eq!(plain.image, logged.image);
+    assert_eq!(plain.counters, logged.counters);
+    // One camera ray per sample; the other closest-hit rays are
+    // continuations, each starting where a path's previous ray ended.
+    assert_eq!(log.camera.len() as u64, plain.samples);
+    assert_eq!(
+        (log.camera.len() + log.bounce.len()) as u64,
+        plain.counters.rays
+    );
+    assert_eq!(log.shadow.len() as u64, plain.counters.shadow_rays);
+    assert!(log.bounce.len() > log.camera.len());
+    let camera_origin = s.camera().film_rays().ray(glam::Vec2::splat(64.0)).origin;
+    assert!(log.camera.iter().all(|r| r.origin == camera_origin));
+    // The box is closed: every camera and continuation ray hits something,
+    // and shadow rays end short of the light (t_max < 1 along y − origin).
+    let accel = s.accel();
+    assert!(
+        log.bounce
+            .iter()
+            .take(2000)
+            .all(|r| accel.closest_hit(r).is_some())
+    );
+    assert!(log.shadow.iter().all(|r| r.t_max < 1.0 && r.t_max > 0.99));
+    // Shadow rays start on surfaces inside the box and mostly reach the light.
+    let blocked = log.shadow.iter().filter(|r| accel.occluded(r)).count();
+    assert!(
+        blocked * 10 < log.shadow.len(),
+        "{blocked} of {}",
+        log.shadow.len()
+    );
 }

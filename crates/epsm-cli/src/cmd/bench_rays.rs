@@ -1,4 +1,5 @@
-//! `epsm bench rays`: BVH build and ray throughput on a bumpy sphere.
+//! `epsm bench rays`: BVH build and ray throughput on a bumpy sphere, or on
+//! the rays a render of a scene file casts.
 //!
 //! The scene is a displaced geodesic sphere (an icosahedron whose faces are
 //! split into `k²` triangles each, projected to the unit sphere and displaced
@@ -9,24 +10,37 @@
 //! scanline order) and incoherent rays (uniform origins in the scene's box,
 //! uniform directions), on 1 and 2 rayon threads.
 //!
+//! With `--scene`, the scene file is rendered once at `--spp` with every ray
+//! logged (`epsm_render::tracer::render_logged`), and its camera rays
+//! (closest hit), continuation rays (closest hit) and shadow rays
+//! (occlusion) are each walked back to back, in the order the render cast
+//! them: the walks without the shading between them, on the ray
+//! distribution of the path tracer itself.
+//!
 //! | option | unit | default | range |
 //! |---|---|---|---|
 //! | `--triangles` | triangles in the sphere | 100000 | [20, 2²²] |
 //! | `--rays` | rays per measurement | 1000000 | [1, 2²⁵] |
+//! | `--scene` | a scene file (TOML, Mitsuba XML, glTF) instead of the sphere | — | — |
+//! | `--spp` | samples per pixel of the logged render (with `--scene`) | 16 | [1, 4096] |
 //! | `--threads` | rayon threads (one run) | 1 and 2 | ≥ 1 |
 //! | `--repeat` | runs per measurement, fastest reported | 3 | ≥ 1 |
 //! | `--json` | print one JSON object | off | — |
 //!
 //! `cargo run --release -p epsm-cli -- bench rays --json`
+//! `cargo run --release -p epsm-cli -- bench rays --scene scenes/caustic-box.toml`
 
 mod scene;
 
+use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::Context;
 use epsm_render::bvh::Accel;
 use epsm_render::scene::Object;
+use epsm_render::scene::load::load_scene;
+use epsm_render::tracer::{RenderOptions, render_logged};
 use epsm_render::{Camera, Ray};
 use glam::{DVec3, Vec2};
 use rayon::prelude::*;
@@ -36,16 +50,27 @@ use serde::Serialize;
 const MAX_TRIANGLES: usize = 1 << 22;
 /// Most rays per measurement (two sets of 32-byte rays: 2 GB).
 const MAX_RAYS: usize = 1 << 25;
+/// Most samples per pixel of a logged render (`--scene`).
+const MAX_SPP: u32 = 4096;
+/// Most rays a logged render may cast (32 bytes each: 4 GB).
+const MAX_LOGGED_RAYS: u64 = 1 << 27;
 
 /// Options of `epsm bench rays`.
 #[derive(clap::Args, Debug)]
 pub struct RaysBenchArgs {
     /// Triangles in the bumpy sphere (rounded to 20·k²).
-    #[arg(long, default_value_t = 100_000)]
+    #[arg(long, default_value_t = 100_000, conflicts_with = "scene")]
     pub triangles: usize,
     /// Rays per measurement.
-    #[arg(long, default_value_t = 1_000_000)]
+    #[arg(long, default_value_t = 1_000_000, conflicts_with = "scene")]
     pub rays: usize,
+    /// Walk the rays a render of this scene file casts instead (camera,
+    /// continuation and shadow rays).
+    #[arg(long)]
+    pub scene: Option<PathBuf>,
+    /// Samples per pixel of the logged render (with --scene).
+    #[arg(long, default_value_t = 16, requires = "scene")]
+    pub spp: u32,
     /// Rayon threads (default: measure 1 and 2).
     #[arg(long)]
     pub threads: Option<usize>,
@@ -61,7 +86,10 @@ pub struct RaysBenchArgs {
 #[derive(Serialize)]
 struct Throughput {
     threads: usize,
+    /// The ray set.
     rays: &'static str,
+    /// Rays in the set.
+    count: usize,
     query: &'static str,
     mrays_per_s: f64,
     /// Rays per CPU-second of the process (Linux only): the rate per busy
@@ -73,16 +101,101 @@ struct Throughput {
 /// Everything measured.
 #[derive(Serialize)]
 struct Report {
+    /// The scene file whose rays were walked (`--scene`), else absent.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    scene: Option<String>,
+    /// Samples per pixel of the logged render (`--scene`), else absent.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    spp: Option<u32>,
     triangles: usize,
     instances: usize,
     build_seconds: f64,
-    tlas_update_seconds: f64,
+    /// Moving one instance and updating the top level (the sphere only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    tlas_update_seconds: Option<f64>,
     accel_bytes: usize,
     throughput: Vec<Throughput>,
 }
 
+/// One set of rays to walk, and how.
+struct RaySet {
+    /// What the rays are (`coherent`, `camera`, ...).
+    name: &'static str,
+    rays: Vec<Ray>,
+    /// Walk for occlusion (else closest hit).
+    occlusion: bool,
+}
+
 /// Runs the benchmark.
 pub fn run(args: &RaysBenchArgs) -> anyhow::Result<()> {
+    super::check_threads(args.threads)?;
+    anyhow::ensure!(args.repeat >= 1, "--repeat must be at least 1");
+    match &args.scene {
+        Some(path) => {
+            let scene = load_scene(path)?;
+            let sets = scene_rays(&scene, args.spp)?;
+            let stats = scene.accel().stats();
+            let report = Report {
+                scene: Some(path.display().to_string()),
+                spp: Some(args.spp),
+                triangles: stats.triangles,
+                instances: stats.objects,
+                build_seconds: stats.build_seconds,
+                tlas_update_seconds: None,
+                accel_bytes: stats.bytes,
+                throughput: throughputs(scene.accel(), &sets, args)?,
+            };
+            print(&report, args.json)
+        }
+        None => sphere(args),
+    }
+}
+
+/// The rays a render of `scene` at `spp` samples per pixel casts: camera and
+/// continuation rays (closest hit), shadow rays (occlusion).
+fn scene_rays(scene: &epsm_render::Scene, spp: u32) -> anyhow::Result<Vec<RaySet>> {
+    anyhow::ensure!(
+        (1..=MAX_SPP).contains(&spp),
+        "--spp must be in [1, {MAX_SPP}], got {spp}"
+    );
+    let opts = RenderOptions {
+        spp,
+        ..RenderOptions::from_scene(scene)
+    };
+    let camera = scene.camera();
+    // A sample casts at most `max_depth + 1` closest-hit rays and
+    // `max_depth` shadow rays.
+    let bound = u64::from(camera.width)
+        * u64::from(camera.height)
+        * u64::from(spp)
+        * (2 * u64::from(opts.max_depth) + 1);
+    anyhow::ensure!(
+        bound <= MAX_LOGGED_RAYS,
+        "--spp {spp}: the render could cast {bound} rays, more than the {MAX_LOGGED_RAYS} \
+         a logged render may hold; use a smaller --spp"
+    );
+    let (_, log) = render_logged(scene, &opts, &|_| {});
+    Ok(vec![
+        RaySet {
+            name: "camera",
+            rays: log.camera,
+            occlusion: false,
+        },
+        RaySet {
+            name: "bounce",
+            rays: log.bounce,
+            occlusion: false,
+        },
+        RaySet {
+            name: "shadow",
+            rays: log.shadow,
+            occlusion: true,
+        },
+    ])
+}
+
+/// The bumpy sphere's benchmark.
+fn sphere(args: &RaysBenchArgs) -> anyhow::Result<()> {
     anyhow::ensure!(
         (20..=MAX_TRIANGLES).contains(&args.triangles),
         "--triangles must be in [20, {MAX_TRIANGLES}], got {}",
@@ -93,8 +206,6 @@ pub fn run(args: &RaysBenchArgs) -> anyhow::Result<()> {
         "--rays must be in [1, {MAX_RAYS}], got {}",
         args.rays
     );
-    super::check_threads(args.threads)?;
-    anyhow::ensure!(args.repeat >= 1, "--repeat must be at least 1");
     let mesh = Arc::new(scene::bumpy_sphere(args.triangles));
     let objects = scene::scene(&mesh);
     let mut accel = Accel::build(&objects);
@@ -120,7 +231,37 @@ pub fn run(args: &RaysBenchArgs) -> anyhow::Result<()> {
         })
         .collect();
     let incoherent = scene::random_rays(args.rays, lo, hi);
+    let mut sets = Vec::new();
+    for (name, rays) in [("coherent", coherent), ("incoherent", incoherent)] {
+        for occlusion in [false, true] {
+            sets.push(RaySet {
+                name,
+                rays: rays.clone(),
+                occlusion,
+            });
+        }
+    }
+    let stats = accel.stats();
+    let report = Report {
+        scene: None,
+        spp: None,
+        triangles: mesh.len(),
+        instances: stats.objects,
+        build_seconds,
+        tlas_update_seconds: Some(tlas_update_seconds),
+        accel_bytes: stats.bytes,
+        throughput: throughputs(&accel, &sets, args)?,
+    };
+    print(&report, args.json)
+}
 
+/// Each ray set's throughput on one and two threads (or `--threads`), the
+/// fastest of `--repeat` runs.
+fn throughputs(
+    accel: &Accel,
+    sets: &[RaySet],
+    args: &RaysBenchArgs,
+) -> anyhow::Result<Vec<Throughput>> {
     let thread_counts = args.threads.map_or(vec![1, 2], |n| vec![n]);
     // All pools live to the end: a thread exiting mid-measurement would take
     // its CPU time out of the process total.
@@ -130,40 +271,31 @@ pub fn run(args: &RaysBenchArgs) -> anyhow::Result<()> {
         .collect::<Result<Vec<_>, _>>()?;
     let mut throughput = Vec::new();
     for (&threads, pool) in thread_counts.iter().zip(&pools) {
-        for (name, rays) in [("coherent", &coherent), ("incoherent", &incoherent)] {
-            for query in ["closest", "occluded"] {
-                let runs = (0..args.repeat.max(1))
-                    .map(|_| pool.install(|| measure(&accel, rays, query == "occluded")));
-                let best = runs.fold(None, |best: Option<Run>, run| match best {
-                    Some(b) if b.seconds <= run.seconds => Some(b),
-                    _ => Some(run),
-                });
-                let Run {
-                    seconds,
-                    cpu_seconds,
-                    hits,
-                } = best.context("no run")?;
-                throughput.push(Throughput {
-                    threads,
-                    rays: name,
-                    query,
-                    mrays_per_s: rays.len() as f64 / seconds / 1e6,
-                    mrays_per_cpu_s: cpu_seconds.map(|c| rays.len() as f64 / c / 1e6),
-                    hit_fraction: hits as f64 / rays.len() as f64,
-                });
-            }
+        for set in sets.iter().filter(|s| !s.rays.is_empty()) {
+            let runs = (0..args.repeat.max(1))
+                .map(|_| pool.install(|| measure(accel, &set.rays, set.occlusion)));
+            let best = runs.fold(None, |best: Option<Run>, run| match best {
+                Some(b) if b.seconds <= run.seconds => Some(b),
+                _ => Some(run),
+            });
+            let Run {
+                seconds,
+                cpu_seconds,
+                hits,
+            } = best.context("no run")?;
+            let rays = set.rays.len() as f64;
+            throughput.push(Throughput {
+                threads,
+                rays: set.name,
+                count: set.rays.len(),
+                query: if set.occlusion { "occluded" } else { "closest" },
+                mrays_per_s: rays / seconds / 1e6,
+                mrays_per_cpu_s: cpu_seconds.map(|c| rays / c / 1e6),
+                hit_fraction: hits as f64 / rays,
+            });
         }
     }
-    let stats = accel.stats();
-    let report = Report {
-        triangles: mesh.len(),
-        instances: stats.objects,
-        build_seconds,
-        tlas_update_seconds,
-        accel_bytes: stats.bytes,
-        throughput,
-    };
-    print(&report, args.json)
+    Ok(throughput)
 }
 
 fn print(report: &Report, json: bool) -> anyhow::Result<()> {
@@ -171,23 +303,30 @@ fn print(report: &Report, json: bool) -> anyhow::Result<()> {
         println!("{}", serde_json::to_string(report)?);
         return Ok(());
     }
+    if let (Some(scene), Some(spp)) = (&report.scene, report.spp) {
+        println!("{scene}: the rays of a render at {spp} spp");
+    }
+    let update = report
+        .tlas_update_seconds
+        .map(|s| format!(", TLAS update {:.1} µs", s * 1e6))
+        .unwrap_or_default();
     println!(
-        "{} triangles, {} instances: build {:.1} ms, TLAS update {:.1} µs, {:.1} MB",
+        "{} triangles, {} instances: build {:.1} ms{update}, {:.1} MB",
         report.triangles,
         report.instances,
         report.build_seconds * 1e3,
-        report.tlas_update_seconds * 1e6,
         report.accel_bytes as f64 / 1e6
     );
     for t in &report.throughput {
         println!(
-            "{} thread(s) {:>10} {:>8}: {:6.2} Mrays/s, {:6.2} Mrays/CPU-s ({:.0}% hit)",
+            "{} thread(s) {:>10} {:>8}: {:6.2} Mrays/s, {:6.2} Mrays/CPU-s ({:.0}% hit, {} rays)",
             t.threads,
             t.rays,
             t.query,
             t.mrays_per_s,
             t.mrays_per_cpu_s.unwrap_or(f64::NAN),
-            t.hit_fraction * 100.0
+            t.hit_fraction * 100.0,
+            t.count
         );
     }
     Ok(())

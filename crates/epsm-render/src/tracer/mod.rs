@@ -116,6 +116,60 @@ pub struct RenderOutput {
     pub counters: TraceCounters,
 }
 
+/// The rays a render cast, in the order each tile traced them (tiles in
+/// row-major order): what [`render_logged`] returns, for measuring the BVH on
+/// a scene's own rays (`epsm bench rays --scene`).
+#[derive(Clone, Debug, Default)]
+pub struct RayLog {
+    /// Camera rays (closest hit, bounce 0): coherent, pixel by pixel.
+    pub camera: Vec<Ray>,
+    /// Continuation rays (closest hit, bounces 1 and later): incoherent.
+    pub bounce: Vec<Ray>,
+    /// Shadow rays of next-event estimation (occlusion, `t_max` short of the
+    /// light point).
+    pub shadow: Vec<Ray>,
+}
+
+impl RayLog {
+    fn append(&mut self, other: &mut RayLog) {
+        self.camera.append(&mut other.camera);
+        self.bounce.append(&mut other.bounce);
+        self.shadow.append(&mut other.shadow);
+    }
+}
+
+/// Where the tracer reports each ray it casts: [`NoSink`] when rendering, a
+/// [`RayLog`] for [`render_logged`].
+trait RaySink {
+    /// A closest-hit ray of bounce `depth` (0: the camera ray).
+    fn closest(&mut self, depth: u32, ray: &Ray);
+    /// A shadow ray.
+    fn shadow(&mut self, ray: &Ray);
+}
+
+/// Reports nothing (a render's sink: its calls compile to nothing).
+struct NoSink;
+
+impl RaySink for NoSink {
+    #[inline(always)]
+    fn closest(&mut self, _depth: u32, _ray: &Ray) {}
+    #[inline(always)]
+    fn shadow(&mut self, _ray: &Ray) {}
+}
+
+impl RaySink for RayLog {
+    fn closest(&mut self, depth: u32, ray: &Ray) {
+        if depth == 0 {
+            self.camera.push(*ray);
+        } else {
+            self.bounce.push(*ray);
+        }
+    }
+    fn shadow(&mut self, ray: &Ray) {
+        self.shadow.push(*ray);
+    }
+}
+
 /// One pixel sample to trace.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct PixelSample {
@@ -132,7 +186,19 @@ pub fn render(
     opts: &RenderOptions,
     progress: &(dyn Fn(u64) + Sync),
 ) -> RenderOutput {
-    render_tiles(scene, opts, None, progress).0
+    render_tiles(scene, opts, None, false, progress).0
+}
+
+/// Renders the scene and logs every ray it casts ([`RayLog`]). The image is
+/// bit-identical to [`render`]'s; the render itself is slower (it runs the
+/// portable build of the tile loop and stores each ray).
+pub fn render_logged(
+    scene: &Scene,
+    opts: &RenderOptions,
+    progress: &(dyn Fn(u64) + Sync),
+) -> (RenderOutput, RayLog) {
+    let (out, _, rays) = render_tiles(scene, opts, None, true, progress);
+    (out, rays)
 }
 
 /// Renders the scene and records every pixel sample's path at `level`.
@@ -144,7 +210,8 @@ pub fn render_recorded(
     level: RecordLevel,
     progress: &(dyn Fn(u64) + Sync),
 ) -> (RenderOutput, Vec<PathRecord>) {
-    render_tiles(scene, opts, Some(level), progress)
+    let (out, records, _) = render_tiles(scene, opts, Some(level), false, progress);
+    (out, records)
 }
 
 /// Traces the given pixel samples (with the random streams of a render with
@@ -169,6 +236,7 @@ pub fn trace_samples(
                 camera_sample(&film_rays, &keys, s.pixel, s.sample),
                 Some((level, &mut rec)),
                 &mut counters,
+                &mut NoSink,
                 Portable,
             );
             rec
@@ -176,19 +244,22 @@ pub fn trace_samples(
         .collect()
 }
 
+/// Renders the tiles in parallel: the image, with the records at `level`,
+/// and with `log` the rays cast.
 fn render_tiles(
     scene: &Scene,
     opts: &RenderOptions,
     level: Option<RecordLevel>,
+    log: bool,
     progress: &(dyn Fn(u64) + Sync),
-) -> (RenderOutput, Vec<PathRecord>) {
+) -> (RenderOutput, Vec<PathRecord>, RayLog) {
     let start = Instant::now();
     let (w, h) = (scene.camera().width, scene.camera().height);
     let (tx, ty) = (w.div_ceil(TILE), h.div_ceil(TILE));
-    let tiles: Vec<TileOutput> = (0..tx * ty)
+    let mut tiles: Vec<TileOutput> = (0..tx * ty)
         .into_par_iter()
         .map(|t| {
-            let out = render_tile(scene, opts, level, UVec2::new(t % tx, t / tx));
+            let out = render_tile(scene, opts, level, log, UVec2::new(t % tx, t / tx));
             progress(out.pixels.len() as u64 * opts.spp as u64);
             out
         })
@@ -196,7 +267,9 @@ fn render_tiles(
     let mut image = Image::new(w, h);
     let mut counters = TraceCounters::default();
     let mut records = Vec::new();
-    for tile in &tiles {
+    let mut rays = RayLog::default();
+    for tile in &mut tiles {
+        rays.append(&mut tile.rays);
         counters.add(&tile.counters);
         for (pixel, value) in &tile.pixels {
             image.set(pixel.x, pixel.y, *value);
@@ -216,6 +289,7 @@ fn render_tiles(
             counters,
         },
         records,
+        rays,
     )
 }
 
@@ -223,17 +297,26 @@ struct TileOutput {
     pixels: Vec<(UVec2, Vec3)>,
     records: Vec<PathRecord>,
     counters: TraceCounters,
+    /// The rays cast, when logged.
+    rays: RayLog,
 }
 
 /// Renders one tile, with the AVX2 build of the tracer (and AVX box tests)
-/// where the CPU has it.
+/// where the CPU has it; with `log`, with the portable build and every ray
+/// cast logged (the same image: module docs of `bvh::node`).
 #[allow(unsafe_code)]
 fn render_tile(
     scene: &Scene,
     opts: &RenderOptions,
     level: Option<RecordLevel>,
+    log: bool,
     tile: UVec2,
 ) -> TileOutput {
+    if log {
+        let mut rays = RayLog::default();
+        let out = render_tile_body(scene, opts, level, tile, &mut rays, Portable);
+        return TileOutput { rays, ..out };
+    }
     #[cfg(target_arch = "x86_64")]
     if let Some(avx) = Avx::detect()
         && std::arch::is_x86_feature_detected!("avx2")
@@ -247,7 +330,7 @@ fn render_tile(
         // implies the AVX and SSE levels below it).
         return unsafe { render_tile_avx2(scene, opts, level, tile, avx) };
     }
-    render_tile_body(scene, opts, level, tile, Portable)
+    render_tile_body(scene, opts, level, tile, &mut NoSink, Portable)
 }
 
 /// [`render_tile_body`] compiled for AVX2 and the bit-manipulation
@@ -267,16 +350,17 @@ fn render_tile_avx2(
     tile: UVec2,
     avx: Avx,
 ) -> TileOutput {
-    render_tile_body(scene, opts, level, tile, avx)
+    render_tile_body(scene, opts, level, tile, &mut NoSink, avx)
 }
 
-/// Renders one tile, box tests by `boxes`.
+/// Renders one tile, box tests by `boxes`, every ray cast reported to `sink`.
 #[inline(always)]
 fn render_tile_body(
     scene: &Scene,
     opts: &RenderOptions,
     level: Option<RecordLevel>,
     tile: UVec2,
+    sink: &mut impl RaySink,
     boxes: impl BoxTest,
 ) -> TileOutput {
     let (w, h) = (scene.camera().width, scene.camera().height);
@@ -285,6 +369,7 @@ fn render_tile_body(
         pixels: Vec::new(),
         records: Vec::new(),
         counters: TraceCounters::default(),
+        rays: RayLog::default(),
     };
     for y in tile.y * TILE..((tile.y + 1) * TILE).min(h) {
         for x in tile.x * TILE..((tile.x + 1) * TILE).min(w) {
@@ -310,14 +395,21 @@ fn render_tile_body(
                             current,
                             Some((level, &mut rec)),
                             &mut out.counters,
+                            sink,
                             boxes,
                         );
                         out.records.push(rec);
                         l
                     }
-                    None => {
-                        trace_pixel_sample(scene, opts, current, None, &mut out.counters, boxes)
-                    }
+                    None => trace_pixel_sample(
+                        scene,
+                        opts,
+                        current,
+                        None,
+                        &mut out.counters,
+                        sink,
+                        boxes,
+                    ),
                 };
                 sum += l;
             }
@@ -358,8 +450,8 @@ fn camera_sample<'a>(
     }
 }
 
-/// Traces a pixel sample from its [`camera_sample`] (box tests by `boxes`);
-/// returns its radiance (zero, counted, and its record marked dropped, when
+/// Traces a pixel sample from its [`camera_sample`] (box tests by `boxes`,
+/// rays reported to `sink`); returns its radiance (zero, counted, and its record marked dropped, when
 /// it was not finite).
 #[inline(always)]
 fn trace_pixel_sample(
@@ -374,6 +466,7 @@ fn trace_pixel_sample(
     }: CameraSample<'_>,
     record: Option<(RecordLevel, &mut PathRecord)>,
     counters: &mut TraceCounters,
+    sink: &mut impl RaySink,
     boxes: impl BoxTest,
 ) -> Vec3 {
     let mut rec = record.map(|(level, rec)| {
@@ -389,7 +482,16 @@ fn trace_pixel_sample(
             done: false,
         }
     });
-    let l = trace_path(scene, opts, ray, &sampler, rec.as_mut(), counters, boxes);
+    let l = trace_path(
+        scene,
+        opts,
+        ray,
+        &sampler,
+        rec.as_mut(),
+        counters,
+        sink,
+        boxes,
+    );
     if l.is_finite() {
         if let Some(r) = rec {
             r.rec.radiance = l;

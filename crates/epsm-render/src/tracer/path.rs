@@ -5,7 +5,7 @@ use glam::Vec3;
 
 use super::{
     DIM_DIRECTION, DIM_FIRST_BOUNCE, DIM_LIGHT, DIM_LIGHT_SELECT, DIM_LOBE, DIM_ROULETTE,
-    DIMS_PER_BOUNCE, RenderOptions, SHADOW_EPS, TraceCounters,
+    DIMS_PER_BOUNCE, RaySink, RenderOptions, SHADOW_EPS, TraceCounters,
 };
 use crate::bvh::BoxTest;
 use crate::hit::SurfacePoint;
@@ -33,10 +33,11 @@ fn mis(a: f32, b: f32) -> f32 {
     if a2 + b2 > 0.0 { a2 / (a2 + b2) } else { 0.0 }
 }
 
-/// Traces a path from a camera ray (box tests by `boxes`); returns its
-/// radiance. Always inlined, as are the BVH queries it makes, so the AVX2
-/// build of the tile loop compiles them too.
+/// Traces a path from a camera ray (box tests by `boxes`, every ray cast
+/// reported to `sink`); returns its radiance. Always inlined, as are the BVH
+/// queries it makes, so the AVX2 build of the tile loop compiles them too.
 #[inline(always)]
+#[allow(clippy::too_many_arguments)] // the path's inputs, what observes it, the box test
 pub(super) fn trace_path(
     scene: &Scene,
     opts: &RenderOptions,
@@ -44,6 +45,7 @@ pub(super) fn trace_path(
     sampler: &PixelSampler<'_>,
     mut rec: Option<&mut Recording<'_>>,
     counters: &mut TraceCounters,
+    sink: &mut impl RaySink,
     boxes: impl BoxTest,
 ) -> Vec3 {
     let objects = scene.objects();
@@ -64,6 +66,7 @@ pub(super) fn trace_path(
         let scatters = depth < opts.max_depth;
         let numbers = sampler.block(DIM_FIRST_BOUNCE + depth * DIMS_PER_BOUNCE);
         counters.rays += 1;
+        sink.closest(depth, &ray);
 
         // Find the next vertex; rays that leave see the background.
         let Some(hit) = scene.accel().closest_hit_with(&ray, boxes) else {
@@ -139,7 +142,11 @@ pub(super) fn trace_path(
             material,
         };
         let nee = if scatters {
-            next_event(scene, &shading, beta, &numbers, record_at, counters, boxes)
+            next_event(scene, &shading, beta, &numbers, record_at, |shadow| {
+                counters.shadow_rays += 1;
+                sink.shadow(shadow);
+                scene.accel().occluded_with(shadow, boxes)
+            })
         } else {
             NextEvent::NONE
         };
@@ -230,8 +237,9 @@ impl NextEvent {
 }
 
 /// Samples a light, evaluates the BSDF toward it, MIS-weights against BSDF
-/// sampling and traces the shadow ray (box tests by `boxes`). Draws three
-/// random numbers of the bounce's block `numbers`, none at a delta vertex.
+/// sampling and traces the shadow ray with `occluded` (whether something
+/// blocks it). Draws three random numbers of the bounce's block `numbers`,
+/// none at a delta vertex.
 #[inline(always)]
 fn next_event(
     scene: &Scene,
@@ -239,8 +247,7 @@ fn next_event(
     beta: Vec3,
     numbers: &Block<'_>,
     record_at: Option<u32>,
-    counters: &mut TraceCounters,
-    boxes: impl BoxTest,
+    occluded: impl FnOnce(&Ray) -> bool,
 ) -> NextEvent {
     let mut out = NextEvent::NONE;
     if at.material.is_delta() {
@@ -265,8 +272,7 @@ fn next_event(
     };
     let unoccluded = beta * f * ls.radiance * (w / ls.pdf);
     let shadow = shadow_ray(at.sp, ls.wo, wo_ng, ls.position, ls.dist);
-    counters.shadow_rays += 1;
-    let blocked = scene.accel().occluded_with(&shadow, boxes);
+    let blocked = occluded(&shadow);
     if !blocked {
         out.contribution = unoccluded;
     }
