@@ -291,3 +291,14 @@ fn bench_rays_on_a_scene_walks_the_rays_of_its_render() {
             > 0.9
     );
 }
+
+#[test]
+fn a_missing_file_is_reported_once_with_its_cause() {
+    let run = epsm(&["render", "/nonexistent/scene.toml"]);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(1), "{stderr}");
+    assert_eq!(
+        stderr.trim(),
+        "error: /nonexistent/scene.toml: No such file or directory (os error 2)"
+    );
+}

@@ -104,7 +104,7 @@ mod testing;
 pub mod vertex;
 
 pub use drops::{DropCounts, DropReason, Dropped};
-pub use error::{Error, Result};
+pub use error::{Error, Result, error_chain};
 pub use motion::Motion;
 pub use params::ParamTable;
 pub use paths::{DiffPath, PathKind, classify};

@@ -15,7 +15,7 @@ use std::thread::JoinHandle;
 pub use messages::{Command, Loaded, Overlay, RunSettings, Stepped, Update};
 pub use session::{MAX_SPP, PASS_SPP};
 
-use messages::error_chain;
+use epsm_core::error_chain;
 use session::Session;
 
 /// Wakes the UI when an update is sent (e.g. `egui::Context::request_repaint`).
