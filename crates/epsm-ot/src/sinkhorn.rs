@@ -286,6 +286,13 @@ fn solve_one(
     })
 }
 
+/// The spread check of an entropic solve: [`OtError::SpreadTooLarge`] when the
+/// squared diameter `diameter_sq` over `min(blur², 1)` exceeds [`MAX_SPREAD`].
+pub(crate) fn check_range(diameter_sq: f64, settings: &SinkhornSettings) -> Result<(), OtError> {
+    let eps = settings.blur * settings.blur;
+    check_spread("sinkhorn", diameter_sq, eps.min(1.0), MAX_SPREAD)
+}
+
 /// Solves the entropic problem from `source` to `target`.
 ///
 /// Fails with [`OtError::SpreadTooLarge`] when the clouds' squared diameter
@@ -300,8 +307,7 @@ pub fn solve(
     settings.validate()?;
     check_pair(source, target)?;
     let diam2 = diameter_sq(source, target);
-    let eps = settings.blur * settings.blur;
-    check_spread("sinkhorn", diam2, eps.min(1.0), MAX_SPREAD)?;
+    check_range(diam2, settings)?;
     let mut phases = PhaseTimes::default();
     let (x, y) = phases.time("cluster", || {
         (
