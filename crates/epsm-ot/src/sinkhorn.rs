@@ -46,6 +46,8 @@ mod coarse;
 mod dual;
 mod pass;
 
+use std::sync::LazyLock;
+
 use crate::blocks::Clustered;
 use crate::cost::{check_spread, diameter_sq, displacement_gradient};
 use crate::error::OtError;
@@ -59,6 +61,10 @@ pub(crate) use dual::{Dual, polish, solve_dual};
 /// 1e-300 (`ε` underflows to 0) the ε schedule never reaches its end (9 GB
 /// and still running after 20 s).
 pub const MIN_BLUR: f64 = 1e-4;
+
+/// The accepted range of `blur` in words, from [`MIN_BLUR`]: "must be finite and at least 1e-4".
+static BLUR_RANGE: LazyLock<String> =
+    LazyLock::new(|| format!("must be finite and at least {MIN_BLUR:e}"));
 
 /// The largest accepted `diameter² / min(ε, 1)` of a solve ([`OtError::SpreadTooLarge`]).
 ///
@@ -192,11 +198,7 @@ impl SinkhornSettings {
     pub fn validate(&self) -> Result<(), OtError> {
         let bad = |key, value: f64, reason| Err(OtError::InvalidSetting { key, value, reason });
         if !self.blur.is_finite() || self.blur < MIN_BLUR {
-            return bad(
-                "sinkhorn.blur",
-                self.blur,
-                "must be finite and at least 1e-4",
-            );
+            return bad("sinkhorn.blur", self.blur, BLUR_RANGE.as_str());
         }
         if self.scaling.is_nan() || self.scaling <= 0.0 || self.scaling >= 1.0 {
             return bad("sinkhorn.scaling", self.scaling, "must be in (0, 1)");
