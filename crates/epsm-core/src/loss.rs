@@ -9,7 +9,8 @@
 //!   (Reinhard, so already in `[0, 1)`, then clamped) and `x, y ∈ [0, 1]` the
 //!   pixel centre over the image size. Rendered and target clouds are matched
 //!   by epsm-ot's exact or entropic solver; `L = 1/n Σ ‖P_i − T_i‖²`.
-//! - **L2**: `L = 1/(3n) Σ (c − c*)²` on linear colours; `g_xy = 0`.
+//! - **L2**: `L = 1/(3n) Σ (c − c*)²` on linear colours, summed in `f64`
+//!   (finite for all finite pixels); `g_xy = 0`.
 //! - **Colour flow** (`flow = true`, [`add_flow`]): adds to each pixel's
 //!   `g_xy` the derivative of the loss when the pixel's content moves
 //!   (needed for camera moves, which shift the whole image).
@@ -28,7 +29,7 @@
 
 use epsm_ot::{Matcher, PointCloud, SinkhornSettings};
 use epsm_render::Image;
-use glam::{DVec2, Vec2, Vec3};
+use glam::{DVec2, DVec3, Vec2, Vec3};
 
 use crate::run::{OptResult, OptimizeError};
 
@@ -217,21 +218,35 @@ fn check_finite(image: &Image, which: &'static str) -> OptResult<()> {
     Ok(())
 }
 
+/// The colour difference `c − c*` of two pixels, in `f64`.
+///
+/// Its square is finite for all finite `f32` pixels: in `f32`, differences
+/// above about 1.8e19 squared to infinity (an L2 loss of +∞ for pixels 1e20
+/// and −1e20).
+fn difference(c: Vec3, t: Vec3) -> DVec3 {
+    c.as_dvec3() - t.as_dvec3()
+}
+
+/// `L = 1/(3n) Σ ‖c − c*‖²` and `∂L/∂c = 2 (c − c*) / (3n)`, computed in `f64`.
+///
+/// The loss is finite for all finite pixels; a gradient entry above
+/// `f32::MAX` (only possible for n = 1 and `|c − c*|` above 5e38) rounds
+/// to infinity in the `f32` `g_rgb`.
 fn l2(image: &Image, target: &Image) -> LossEval {
-    let n = image.pixels.len() as f32;
+    let n = image.pixels.len() as f64;
     let mut value = 0.0f64;
     let g_rgb = image
         .pixels
         .iter()
         .zip(&target.pixels)
         .map(|(c, t)| {
-            let d = *c - *t;
-            value += f64::from(d.length_squared());
-            2.0 * d / (3.0 * n)
+            let d = difference(*c, *t);
+            value += d.length_squared();
+            (2.0 * d / (3.0 * n)).as_vec3()
         })
         .collect();
     LossEval {
-        value: value / (3.0 * f64::from(n)),
+        value: value / (3.0 * n),
         width: image.width,
         height: image.height,
         g_rgb,
@@ -250,7 +265,7 @@ pub fn rmse(a: &Image, b: &Image) -> f64 {
         .pixels
         .iter()
         .zip(&b.pixels)
-        .map(|(x, y)| f64::from((*x - *y).length_squared()))
+        .map(|(x, y)| difference(*x, *y).length_squared())
         .sum();
     (sum / (3.0 * a.pixels.len() as f64)).sqrt()
 }
@@ -400,6 +415,31 @@ mod tests {
             (tone_map(-1.0), tone_map(1.0), tone_map(f32::MAX)),
             (0.0, 0.5, 1.0)
         );
+    }
+
+    #[test]
+    fn l2_of_huge_finite_pixels_is_finite_and_exact() {
+        // One pixel 1e20 against −1e20 in every channel of a 2x1 image (the
+        // other pixel equal): d = 2e20, L = 3 d² / (3 · 2) = 2e40 and
+        // ∂L/∂c = 2 d / (3 · 2) = 2e20 / 3. In f32 d² overflowed: L = +∞.
+        let (mut img, mut target) = (Image::new(2, 1), Image::new(2, 1));
+        img.set(0, 0, Vec3::splat(1e20));
+        target.set(0, 0, Vec3::splat(-1e20));
+        let e = evaluate(LossKind::L2, &img, &target, 1.0).expect("loss");
+        let d = 2.0 * f64::from(1e20f32);
+        assert!((e.value / (d * d / 2.0) - 1.0).abs() < 1e-15, "{}", e.value);
+        assert!((e.value / 2e40 - 1.0).abs() < 1e-6);
+        for g in e.g_rgb[0].to_array() {
+            assert_eq!(g, (d / 3.0) as f32);
+        }
+        assert_eq!(e.g_rgb[1], Vec3::ZERO);
+        let r = rmse(&img, &target);
+        assert!((r / (d / 2f64.sqrt()) - 1.0).abs() < 1e-15, "{r}");
+        // The extremes of f32: still finite.
+        img.set(0, 0, Vec3::splat(f32::MAX));
+        target.set(0, 0, Vec3::splat(-f32::MAX));
+        let e = evaluate(LossKind::L2, &img, &target, 1.0).expect("loss");
+        assert!(e.value.is_finite() && e.g_rgb[0].is_finite() && rmse(&img, &target).is_finite());
     }
 
     #[test]

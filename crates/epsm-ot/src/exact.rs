@@ -5,7 +5,13 @@
 //!
 //! Named steps of [`solve`] (for `n ≥ dense_below`; smaller problems go to the
 //! [`dense`] reference solver):
-//! 1. **Warm start**: entropic potentials `f, g` from `sinkhorn` at `warm_start.blur`.
+//! 1. **Warm start**: entropic potentials `f, g` from `sinkhorn` at `warm_start.blur`,
+//!    or a **cold start** (`f = g = 0`, candidates searched among all pairs,
+//!    counted in `SolveStats::cold_starts`) when the clouds are beyond the
+//!    entropic solver's range at that blur (`sinkhorn::MAX_SPREAD`, far below
+//!    [`MAX_DIAMETER_SQ`]) or its potentials are not all finite. Warm-started
+//!    beyond that range, 100 points spread over `[0, 1e18]⁵` got NaN potentials, whose reduced costs no optimality
+//!    check flags, and the solve returned a matching of over 5 times the optimal cost.
 //! 2. **Candidate graph**: for each source point the `candidates` targets of
 //!    smallest `c_ij − g_j`, and for each target the sources of smallest `c_ij − f_i`,
 //!    searched only inside the truncated plan's block support, plus one
@@ -45,12 +51,12 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use crate::blocks::{Clustered, fit_potentials, kept_targets};
+use crate::blocks::{Clustered, Support, fit_potentials, kept_targets};
 use crate::cost::{check_spread, diameter_sq, sq_dist_f64};
 use crate::error::OtError;
 use crate::plan::{OtResult, PhaseTimes, SolveStats};
 use crate::points::{PointCloud, check_pair};
-use crate::sinkhorn::{SinkhornSettings, solve_dual};
+use crate::sinkhorn::{SinkhornSettings, check_range, solve_dual};
 use sparse::SparseAssignment;
 
 /// The largest accepted squared diameter of the two clouds together ([`OtError::SpreadTooLarge`]).
@@ -210,6 +216,54 @@ pub(crate) struct Prices {
     pub stats: SolveStats,
 }
 
+/// Step 1 of the module doc: potentials `f, g` and the block support the candidates are searched in.
+struct WarmStart {
+    f: Vec<f64>,
+    g: Vec<f64>,
+    support: Support,
+    /// Kernel pairs the entropic solve evaluated (also when its potentials were dropped).
+    pairs: u64,
+    /// Whether the entropic potentials were replaced by zeros on the dense support.
+    cold: bool,
+}
+
+/// The entropic warm start at `settings.blur`, or the cold start: zero potentials
+/// and every block pair, when the clouds are beyond the entropic solver's range
+/// ([`check_range`]) or its potentials are not all finite.
+///
+/// Any finite potentials give the optimal matching (the optimality check of
+/// step 4 proves it); non-finite ones would not: a NaN reduced cost is never a
+/// violation. No input inside the range has been found to give a non-finite
+/// potential; the check costs one pass over them.
+fn warm_start(
+    x: &Clustered,
+    y: &Clustered,
+    diameter_sq: f64,
+    settings: &SinkhornSettings,
+) -> WarmStart {
+    let mut pairs = 0;
+    if check_range(diameter_sq, settings).is_ok() {
+        let dual = solve_dual(x, y, diameter_sq, settings);
+        if dual.f.iter().chain(&dual.g).all(|t| t.is_finite()) {
+            return WarmStart {
+                f: dual.f,
+                g: dual.g,
+                support: dual.support,
+                pairs: dual.pairs,
+                cold: false,
+            };
+        }
+        pairs = dual.pairs;
+    }
+    WarmStart {
+        f: vec![0.0; x.cloud.len()],
+        g: vec![0.0; y.cloud.len()],
+        support: Support::dense(x.clusters.len(), y.clusters.len()),
+        pairs,
+        cold: true,
+    }
+}
+
 /// Steps 1–3 of the module doc without the optimality check: the warm start,
 /// the candidate graph and the auction's prices (feasible on the graph only).
 fn sparse_prices(
@@ -220,18 +274,24 @@ fn sparse_prices(
 ) -> Prices {
     // Warm start and candidate graph.
     let mut phases = PhaseTimes::default();
-    let dual = phases.time("warm_start", || {
-        solve_dual(x, y, diameter_sq, &settings.warm_start)
+    let WarmStart {
+        f,
+        g,
+        support,
+        pairs,
+        cold,
+    } = phases.time("warm_start", || {
+        warm_start(x, y, diameter_sq, &settings.warm_start)
     });
-    let (f, g) = (dual.f, dual.g);
     let mut stats = SolveStats {
-        pair_evaluations: dual.pairs,
+        pair_evaluations: pairs,
+        cold_starts: usize::from(cold),
         ..SolveStats::default()
     };
     let k = settings.candidates;
     let candidates_start = Instant::now();
-    let mut edges = best_partners(x, y, &dual.support.rows, &g, k);
-    for (j, row) in best_partners(y, x, &dual.support.cols, &f, k)
+    let mut edges = best_partners(x, y, &support.rows, &g, k);
+    for (j, row) in best_partners(y, x, &support.cols, &f, k)
         .into_iter()
         .enumerate()
     {

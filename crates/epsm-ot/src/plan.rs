@@ -88,6 +88,10 @@ pub struct SolveStats {
     pub added_pairs: usize,
     /// Auctions stopped by their bid budget, whose prices were used as reached (exact solver).
     pub auction_budget_stops: usize,
+    /// Warm starts replaced by the cold start (zero potentials, candidates
+    /// searched among all pairs) because the clouds were beyond the entropic
+    /// warm start's range or its potentials were not finite (exact solver).
+    pub cold_starts: usize,
     /// L1 marginal error of the plan (entropic solver).
     pub marginal_error: Option<f64>,
     /// Coarse corrections whose cluster scaling converged only once lumped per

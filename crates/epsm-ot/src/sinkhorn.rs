@@ -46,6 +46,8 @@ mod coarse;
 mod dual;
 mod pass;
 
+use std::sync::LazyLock;
+
 use crate::blocks::Clustered;
 use crate::cost::{check_spread, diameter_sq, displacement_gradient};
 use crate::error::OtError;
@@ -59,6 +61,10 @@ pub(crate) use dual::{Dual, polish, solve_dual};
 /// 1e-300 (`ε` underflows to 0) the ε schedule never reaches its end (9 GB
 /// and still running after 20 s).
 pub const MIN_BLUR: f64 = 1e-4;
+
+/// The accepted range of `blur` in words, from [`MIN_BLUR`]: "must be finite and at least 1e-4".
+static BLUR_RANGE: LazyLock<String> =
+    LazyLock::new(|| format!("must be finite and at least {MIN_BLUR:e}"));
 
 /// The largest accepted `diameter² / min(ε, 1)` of a solve ([`OtError::SpreadTooLarge`]).
 ///
@@ -192,11 +198,7 @@ impl SinkhornSettings {
     pub fn validate(&self) -> Result<(), OtError> {
         let bad = |key, value: f64, reason| Err(OtError::InvalidSetting { key, value, reason });
         if !self.blur.is_finite() || self.blur < MIN_BLUR {
-            return bad(
-                "sinkhorn.blur",
-                self.blur,
-                "must be finite and at least 1e-4",
-            );
+            return bad("sinkhorn.blur", self.blur, BLUR_RANGE.as_str());
         }
         if self.scaling.is_nan() || self.scaling <= 0.0 || self.scaling >= 1.0 {
             return bad("sinkhorn.scaling", self.scaling, "must be in (0, 1)");
@@ -286,6 +288,13 @@ fn solve_one(
     })
 }
 
+/// The spread check of an entropic solve: [`OtError::SpreadTooLarge`] when the
+/// squared diameter `diameter_sq` over `min(blur², 1)` exceeds [`MAX_SPREAD`].
+pub(crate) fn check_range(diameter_sq: f64, settings: &SinkhornSettings) -> Result<(), OtError> {
+    let eps = settings.blur * settings.blur;
+    check_spread("sinkhorn", diameter_sq, eps.min(1.0), MAX_SPREAD)
+}
+
 /// Solves the entropic problem from `source` to `target`.
 ///
 /// Fails with [`OtError::SpreadTooLarge`] when the clouds' squared diameter
@@ -300,8 +309,7 @@ pub fn solve(
     settings.validate()?;
     check_pair(source, target)?;
     let diam2 = diameter_sq(source, target);
-    let eps = settings.blur * settings.blur;
-    check_spread("sinkhorn", diam2, eps.min(1.0), MAX_SPREAD)?;
+    check_range(diam2, settings)?;
     let mut phases = PhaseTimes::default();
     let (x, y) = phases.time("cluster", || {
         (

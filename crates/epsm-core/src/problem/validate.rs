@@ -131,7 +131,12 @@ pub(super) fn problem(d: &ProblemDesc, file: &Path, locator: &Locator) -> OptRes
     let kind = match l.kind.as_str() {
         "ot_exact" => LossKind::OtExact,
         "ot_sinkhorn" => LossKind::OtSinkhorn {
-            blur: c.check("loss.blur", l.blur, l.blur >= MIN_BLUR, "a number >= 1e-4")?,
+            blur: c.check(
+                "loss.blur",
+                l.blur,
+                l.blur >= MIN_BLUR,
+                &format!("a number >= {MIN_BLUR:e}"),
+            )?,
         },
         "l2" => LossKind::L2,
         other => {

@@ -79,6 +79,7 @@ fn bad_input_is_a_typed_error() {
             bad.solve(&a, &a),
             Err(OtError::InvalidSetting {
                 key: "sinkhorn.blur",
+                reason: "must be finite and at least 1e-4",
                 ..
             })
         ));

@@ -1,7 +1,7 @@
 //! The exact solver against brute force (n ≤ 8), the dense reference and the `lsap` crate.
 
 use super::random_cloud;
-use crate::cost::{assignment_cost, sq_dist_f64};
+use crate::cost::{assignment_cost, diameter_sq, sq_dist_f64};
 use crate::exact::{self, ExactSettings, dense};
 use crate::plan::Matching;
 use crate::points::PointCloud;
@@ -139,6 +139,37 @@ fn sparse_exact_matches_lsap_and_dense_on_blobs_up_to_2048() {
         if n <= 256 {
             let d = dense::solve(&s, &t).unwrap_or_else(|e| panic!("{e}"));
             assert!((d.loss - oracle).abs() <= 1e-9 * (1.0 + oracle));
+        }
+    }
+}
+
+#[test]
+fn sparse_exact_cold_starts_beyond_the_warm_starts_range() {
+    // Clouds spread over [0, scale]⁵: the warm start (blur 0.03) is inside
+    // sinkhorn::MAX_SPREAD at 1e15 and beyond it at 1e18; 3e37 is near the
+    // exact matcher's own bound. The old code warm-started all three: at 1e18
+    // its potentials were NaN and it returned 5.4 times the optimal cost.
+    let mut rng = Rng::new(9);
+    for (scale, cold_starts) in [(1e15, 0), (1e18, 1), (3e37, 1)] {
+        let (s, t) = (
+            random_cloud(&mut rng, 100, scale),
+            random_cloud(&mut rng, 100, scale),
+        );
+        let r = exact::solve(&s, &t, &ExactSettings::default()).unwrap_or_else(|e| panic!("{e}"));
+        let perm = permutation(&r.matching);
+        assert_valid_permutation(&perm);
+        let d = dense::solve(&s, &t).unwrap_or_else(|e| panic!("{e}"));
+        assert!(
+            (r.loss - d.loss).abs() <= 1e-9 * d.loss,
+            "scale {scale:e}: sparse {:e} vs dense {:e}",
+            r.loss,
+            d.loss
+        );
+        assert!((assignment_cost(&s, &t, &perm) - r.loss).abs() <= 1e-12 * r.loss);
+        assert_eq!(r.stats.cold_starts, cold_starts, "scale {scale:e}");
+        assert!(r.gradient.iter().flatten().all(|g| g.is_finite()));
+        if scale > 1e30 {
+            assert!(diameter_sq(&s, &t) > 0.5 * exact::MAX_DIAMETER_SQ);
         }
     }
 }
