@@ -11,9 +11,9 @@
 //! counts is on the opened handle (`fstat`), since the path may have been
 //! replaced in between. On Unix the file is opened with `O_NONBLOCK`, so
 //! that a FIFO swapped in between cannot block the open either; the flag
-//! does not change reads of a regular file. Size caps, where a format has
-//! one, stay with its reader (a glTF buffer's `byteLength`,
-//! [`crate::image_io::MAX_IMAGE_PIXELS`]).
+//! does not change reads of a regular file. A format that caps how much it
+//! reads names its cap: a glTF buffer reads [`read_capped`] to its
+//! `byteLength`; an image has [`crate::image_io::MAX_IMAGE_PIXELS`].
 
 use std::fs::File;
 use std::io::Read;
@@ -66,8 +66,19 @@ fn not_a_file(path: &Path) -> Error {
 
 /// The bytes of the regular file at `path`.
 pub fn read(path: &Path) -> Result<Vec<u8>> {
+    read_capped(path, u64::MAX)
+}
+
+/// The first `max` bytes of the regular file at `path` (all of them when it
+/// is shorter).
+pub fn read_capped(path: &Path, max: u64) -> Result<Vec<u8>> {
+    let file = open(path)?;
     let mut bytes = Vec::new();
-    open(path)?
+    // Room for the whole read up front, as `File::read_to_end` makes it (a
+    // size hint: a failed reservation only means growing as it goes).
+    let size = file.metadata().map_err(io_error(path))?.len().min(max);
+    let _ = bytes.try_reserve(usize::try_from(size).unwrap_or(usize::MAX));
+    file.take(max)
         .read_to_end(&mut bytes)
         .map_err(io_error(path))?;
     Ok(bytes)
@@ -82,16 +93,29 @@ pub fn read_to_string(path: &Path) -> Result<String> {
     Ok(text)
 }
 
-#[cfg(all(test, unix))]
+#[cfg(test)]
 mod tests {
     use super::*;
-    use epsm_testkit::special::{each, refused};
+
+    #[test]
+    fn read_capped_stops_at_the_cap_and_reads_a_shorter_file_whole() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let path = dir.path().join("data.bin");
+        std::fs::write(&path, b"0123456789").expect("write");
+        assert_eq!(read_capped(&path, 4).expect("read"), b"0123");
+        assert_eq!(read_capped(&path, 100).expect("read"), b"0123456789");
+        assert_eq!(read(&path).expect("read"), b"0123456789");
+        let msg = read_capped(dir.path(), 4).expect_err("a directory");
+        assert!(msg.to_string().ends_with("not a regular file"), "{msg}");
+    }
 
     /// The check on the opened handle alone (no look at the path first, as
     /// when a FIFO or a link to `/dev/zero` is swapped in after that look)
     /// refuses each special file at once, without blocking on the FIFO.
+    #[cfg(unix)]
     #[test]
     fn the_handle_check_alone_refuses_a_fifo_and_dev_zero_at_once() {
+        use epsm_testkit::special::{each, refused};
         each("special.bin", |kind, _, path| {
             let msg = refused(move || open_regular(&path));
             assert!(
@@ -101,6 +125,7 @@ mod tests {
         });
     }
 
+    #[cfg(unix)]
     #[test]
     fn the_handle_check_refuses_a_directory_and_reads_a_regular_file_whole() {
         let dir = tempfile::tempdir().expect("temp dir");
