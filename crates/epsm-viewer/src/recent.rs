@@ -41,9 +41,12 @@ impl Recent {
     }
 
     /// Puts `path` first and saves the list (a failed save is ignored: the
-    /// list is a convenience).
+    /// list is a convenience). The path is kept as given, made absolute
+    /// against the working directory but with its symlinks not resolved:
+    /// reopened, a problem reached through a symlink finds the files it
+    /// names relative to itself where the CLI would, next to the link.
     pub fn add(&mut self, path: &Path) {
-        let path = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_owned());
+        let path = std::path::absolute(path).unwrap_or_else(|_| path.to_owned());
         self.files.retain(|f| *f != path);
         self.files.insert(0, path);
         self.files.truncate(KEEP);
@@ -74,5 +77,24 @@ mod tests {
         let names: Vec<_> = r.files.iter().map(|f| f.display().to_string()).collect();
         assert_eq!(names, ["/nowhere/a.toml", "/nowhere/b.toml"]);
         assert_eq!(Recent::load(Some(store)).files, r.files);
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_symlinked_path_is_kept_as_given_not_resolved() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        let real = dir.path().join("real");
+        std::fs::create_dir(&real).expect("mkdir");
+        std::fs::write(real.join("problem.toml"), "").expect("write");
+        let link = dir.path().join("link.toml");
+        std::os::unix::fs::symlink(real.join("problem.toml"), &link).expect("symlink");
+        let mut r = Recent::load(None);
+        r.add(&link);
+        r.add(&dir.path().join(".").join("link.toml"));
+        assert_eq!(r.files, std::slice::from_ref(&link));
+        // A relative path is made absolute against the working directory.
+        r.add(Path::new("relative.toml"));
+        let cwd = std::env::current_dir().expect("working directory");
+        assert_eq!(r.files, [cwd.join("relative.toml"), link]);
     }
 }
