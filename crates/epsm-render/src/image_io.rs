@@ -2,7 +2,7 @@
 //!
 //! | format | read | write |
 //! |---|---|---|
-//! | `.png` | 8- or 16-bit, decoded from sRGB to linear; alpha ignored | 8-bit RGB, values clamped to [0, 1] and sRGB-encoded; non-finite → 0 |
+//! | `.png` | 8- or 16-bit, decoded from sRGB to linear; alpha ignored | 8-bit RGB, values clamped to [0, 1] (+∞ → 1, −∞ → 0) and sRGB-encoded; NaN → 0 |
 //! | `.exr` | first RGB(A) layer, linear; alpha ignored | 32-bit float RGB, exact (non-finite values kept); RLE tiles of 64², written in increasing order so the bytes depend only on the pixels |
 //!
 //! The format is chosen by the (case-insensitive) extension; anything else is
@@ -119,13 +119,11 @@ pub fn srgb_to_linear(v: f32) -> f32 {
     }
 }
 
-/// Linear value → sRGB-encoded, clamped to [0, 1]; non-finite values map to 0.
+/// Linear value → sRGB-encoded, clamped to [0, 1] first: +∞ encodes as
+/// 1 (white) and −∞ as 0, like any value beyond the range; NaN, which has
+/// no place in it, encodes as 0 (black).
 pub fn linear_to_srgb(v: f32) -> f32 {
-    let v = if v.is_finite() {
-        v.clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
+    let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
     if v <= 0.0031308 {
         v * 12.92
     } else {
@@ -289,16 +287,27 @@ mod tests {
     }
 
     #[test]
-    fn png_clamps_and_maps_non_finite_to_zero() {
+    fn srgb_encoding_clamps_infinities_and_maps_nan_to_zero() {
+        let white = linear_to_srgb(1.0);
+        assert_eq!(linear_to_srgb(f32::INFINITY), white);
+        assert_eq!(linear_to_srgb(f32::MAX), white);
+        assert_eq!(linear_to_srgb(f32::NEG_INFINITY), 0.0);
+        assert_eq!(linear_to_srgb(f32::MIN), 0.0);
+        assert_eq!(linear_to_srgb(f32::NAN), 0.0);
+        assert_eq!(linear_to_srgb(-f32::NAN), 0.0);
+    }
+
+    #[test]
+    fn png_clamps_infinities_and_maps_nan_to_zero() {
         let dir = tempfile::tempdir().expect("temp dir");
         let path = dir.path().join("b.png");
         let mut img = Image::new(2, 1);
-        img.set(0, 0, Vec3::new(f32::NAN, f32::INFINITY, -3.0));
-        img.set(1, 0, Vec3::new(7.0, 1.0, 0.5));
+        img.set(0, 0, Vec3::new(f32::NAN, f32::INFINITY, f32::NEG_INFINITY));
+        img.set(1, 0, Vec3::new(7.0, -3.0, 0.5));
         write_image(&path, &img).expect("write png");
         let back = read_image(&path).expect("read png");
-        assert_eq!(back.get(0, 0), Vec3::ZERO);
-        assert_eq!(back.get(1, 0).x, 1.0);
+        assert_eq!(back.get(0, 0), Vec3::new(0.0, 1.0, 0.0));
+        assert_eq!((back.get(1, 0).x, back.get(1, 0).y), (1.0, 0.0));
         assert!((back.get(1, 0).z - 0.5).abs() < 0.01);
     }
 

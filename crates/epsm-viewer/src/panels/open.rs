@@ -15,12 +15,15 @@ pub fn problem_dir() -> Option<PathBuf> {
     [here, built].into_iter().find(|d| d.is_dir())
 }
 
-/// The `.toml` files of `dir`, sorted.
+/// The `.toml` files of `dir` (the extension in any case), sorted.
 fn problems_in(dir: &Path) -> Vec<PathBuf> {
     let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
         .map(|rd| {
             rd.filter_map(|e| e.ok().map(|e| e.path()))
-                .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+                .filter(|p| {
+                    p.extension()
+                        .is_some_and(|x| x.eq_ignore_ascii_case("toml"))
+                })
                 .collect()
         })
         .unwrap_or_default();
@@ -68,5 +71,28 @@ pub fn show(ui: &mut egui::Ui, app: &mut ViewerApp) {
     }
     if let Some(p) = chosen {
         app.open(p);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn problems_are_the_toml_files_in_any_case_sorted() {
+        let dir = tempfile::tempdir().expect("temp dir");
+        for name in ["b.toml", "A.TOML", "c.Toml", "d.txt", "toml", "e.toml.bak"] {
+            std::fs::write(dir.path().join(name), "").expect("write");
+        }
+        let names: Vec<_> = problems_in(dir.path())
+            .iter()
+            .map(|p| {
+                p.file_name()
+                    .expect("a name")
+                    .to_string_lossy()
+                    .into_owned()
+            })
+            .collect();
+        assert_eq!(names, ["A.TOML", "b.toml", "c.Toml"]);
     }
 }

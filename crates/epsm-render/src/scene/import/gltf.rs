@@ -18,7 +18,6 @@
 //! ```
 
 use std::collections::HashSet;
-use std::io::Read;
 use std::path::{Path, PathBuf};
 
 use glam::{DAffine3, DMat4, Vec2, Vec3};
@@ -138,12 +137,8 @@ fn buffer(
                         .as_ref(),
                 ),
             };
-            let file = crate::input_file::open(&path).map_err(|e| format!("uri: {e}"))?;
-            let mut data = Vec::new();
-            file.take(b.length() as u64)
-                .read_to_end(&mut data)
-                .map_err(|e| format!("uri: {}: {e}", path.display()))?;
-            data
+            crate::input_file::read_capped(&path, b.length() as u64)
+                .map_err(|e| format!("uri: {e}"))?
         }
     };
     if data.len() < b.length() {
