@@ -124,7 +124,7 @@ impl<'a> Ctx<'a> {
 
     /// A GGX roughness `alpha` in `[MIN_ALPHA, 1]`.
     pub fn alpha(&self, field: &str, v: f64) -> Result<f32, Error> {
-        let what = format!("a value in [{MIN_ALPHA}, 1]");
+        let what = format!("a value in [{MIN_ALPHA:e}, 1]");
         Ok(self.within(field, v, MIN_ALPHA, 1.0, &what)? as f32)
     }
 
