@@ -10,8 +10,9 @@
 //!    counted in `SolveStats::cold_starts`) when the clouds are beyond the
 //!    entropic solver's range at that blur (`sinkhorn::MAX_SPREAD`, far below
 //!    [`MAX_DIAMETER_SQ`]) or its potentials are not all finite. Warm-started
-//!    beyond that range, 100 points spread over `[0, 1e18]⁵` got NaN potentials, whose reduced costs no optimality
-//!    check flags, and the solve returned a matching of over 5 times the optimal cost.
+//!    beyond that range, 100 points spread over `[0, 1e18]⁵` got NaN
+//!    potentials, whose reduced costs no optimality check flags, and the solve
+//!    returned a matching of over 5 times the optimal cost.
 //! 2. **Candidate graph**: for each source point the `candidates` targets of
 //!    smallest `c_ij − g_j`, and for each target the sources of smallest `c_ij − f_i`,
 //!    searched only inside the truncated plan's block support, plus one
