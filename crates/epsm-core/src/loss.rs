@@ -271,6 +271,11 @@ pub fn rmse(a: &Image, b: &Image) -> f64 {
 }
 
 /// `image` box-filtered down (or sampled up) to `width × height`.
+///
+/// Each output pixel is the mean of its box, summed in `f32`; where that
+/// sum overflows, the mean is taken in `f64` instead, so finite pixels give
+/// a finite mean (and non-finite ones stay non-finite, for the loss's
+/// check to report).
 pub fn resample(image: &Image, width: u32, height: u32) -> Image {
     let mut out = Image::new(width, height);
     for y in 0..height {
@@ -279,13 +284,16 @@ pub fn resample(image: &Image, width: u32, height: u32) -> Image {
             let x1 = ((x + 1) * image.width / width).max(x0 + 1);
             let y0 = y * image.height / height;
             let y1 = ((y + 1) * image.height / height).max(y0 + 1);
-            let mut sum = Vec3::ZERO;
-            for yy in y0..y1 {
-                for xx in x0..x1 {
-                    sum += image.get(xx, yy);
-                }
-            }
-            out.set(x, y, sum / ((x1 - x0) * (y1 - y0)) as f32);
+            let pixels = || (y0..y1).flat_map(move |yy| (x0..x1).map(move |xx| image.get(xx, yy)));
+            let count = (x1 - x0) * (y1 - y0);
+            let mean = pixels().sum::<Vec3>() / count as f32;
+            let mean = if mean.is_finite() {
+                mean
+            } else {
+                let sum: DVec3 = pixels().map(Vec3::as_dvec3).sum();
+                (sum / f64::from(count)).as_vec3()
+            };
+            out.set(x, y, mean);
         }
     }
     out
@@ -446,5 +454,13 @@ mod tests {
     fn mismatched_sizes_are_an_error() {
         assert!(evaluate(LossKind::L2, &Image::new(2, 2), &Image::new(3, 2), 1.0).is_err());
         assert_eq!(resample(&dot(4, 4, (0, 0)), 2, 2).get(0, 0), Vec3::ONE);
+        // Two huge finite pixels: their f32 sum overflows, their mean does not.
+        let mut huge = Image::new(2, 1);
+        huge.set(0, 0, Vec3::splat(3e38));
+        huge.set(1, 0, Vec3::new(3e38, 1e38, -3e38));
+        assert_eq!(resample(&huge, 1, 1).get(0, 0), Vec3::new(3e38, 2e38, 0.0));
+        // A non-finite pixel stays non-finite, for evaluate to report.
+        huge.set(1, 0, Vec3::new(f32::NAN, 1.0, 1.0));
+        assert!(resample(&huge, 1, 1).get(0, 0).x.is_nan());
     }
 }
