@@ -454,6 +454,10 @@ mod tests {
     fn mismatched_sizes_are_an_error() {
         assert!(evaluate(LossKind::L2, &Image::new(2, 2), &Image::new(3, 2), 1.0).is_err());
         assert_eq!(resample(&dot(4, 4, (0, 0)), 2, 2).get(0, 0), Vec3::ONE);
+    }
+
+    #[test]
+    fn resample_averages_huge_finite_pixels_without_overflow() {
         // Two huge finite pixels: their f32 sum overflows, their mean does not.
         let mut huge = Image::new(2, 1);
         huge.set(0, 0, Vec3::splat(3e38));
