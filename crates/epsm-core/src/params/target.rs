@@ -1,6 +1,8 @@
 //! Parameter keys: what each `"<name>.<field>"` drives, and how a key is
 //! resolved against the scene's objects, point lights and materials.
 
+use std::borrow::Cow;
+
 use epsm_render::scene::load::MIN_ALPHA;
 use epsm_render::scene::{MaterialId, ObjectId};
 
@@ -72,12 +74,15 @@ impl Target {
     /// The values a parameter of this target may take, `[lo, hi]`, and the
     /// range in words: material values and factors keep the scene valid,
     /// offsets and angles stay finite in the renderer's `f32`.
-    pub fn domain(&self) -> ([f64; 2], &'static str) {
+    pub fn domain(&self) -> ([f64; 2], Cow<'static, str>) {
         let max = f64::from(f32::MAX);
         let positive = f64::from(f32::MIN_POSITIVE);
-        match self {
+        let (domain, words) = match self {
             Target::Albedo { .. } => ([0.0, 1.0], "an albedo in [0, 1]"),
-            Target::Alpha { .. } => ([MIN_ALPHA, 1.0], "a GGX roughness in [1e-4, 1]"),
+            Target::Alpha { .. } => {
+                let words = format!("a GGX roughness in [{MIN_ALPHA:e}, 1]");
+                return ([MIN_ALPHA, 1.0], Cow::Owned(words));
+            }
             Target::Ior { .. } => ([positive, max], "an IOR > 0"),
             Target::Scale { .. } => ([positive, max], "a scale factor > 0"),
             Target::Emission { .. } => ([0.0, max], "an emission factor >= 0"),
@@ -87,7 +92,8 @@ impl Target {
             | Target::CameraTranslate { .. }
             | Target::CameraYaw
             | Target::CameraPitch => ([-max, max], "a magnitude of at most 3.4e38"),
-        }
+        };
+        (domain, Cow::Borrowed(words))
     }
 }
 

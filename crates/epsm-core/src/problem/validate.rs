@@ -66,7 +66,7 @@ pub(super) fn problem(d: &ProblemDesc, file: &Path, locator: &Locator) -> OptRes
                     "an upper bound above the lower one",
                 )?;
                 for v in [lo, hi] {
-                    c.check(&f("bounds"), v, within_domain(v), range)?;
+                    c.check(&f("bounds"), v, within_domain(v), &range)?;
                 }
                 [lo, hi]
             }
@@ -74,7 +74,7 @@ pub(super) fn problem(d: &ProblemDesc, file: &Path, locator: &Locator) -> OptRes
         };
         let what = match p.bounds {
             Some(_) => "a value within `bounds`",
-            None => range,
+            None => &range,
         };
         let inside = |v: f64| v >= bounds[0] && v <= bounds[1];
         let initial = p
