@@ -122,8 +122,8 @@ struct RaySet {
     /// What the rays are (`coherent`, `camera`, ...).
     name: &'static str,
     rays: Vec<Ray>,
-    /// Walk for occlusion (else closest hit).
-    occlusion: bool,
+    /// The walks to time, in order: occlusion (`true`) or closest hit.
+    queries: &'static [bool],
 }
 
 /// Runs the benchmark.
@@ -132,6 +132,11 @@ pub fn run(args: &RaysBenchArgs) -> anyhow::Result<()> {
     anyhow::ensure!(args.repeat >= 1, "--repeat must be at least 1");
     match &args.scene {
         Some(path) => {
+            anyhow::ensure!(
+                (1..=MAX_SPP).contains(&args.spp),
+                "--spp must be in [1, {MAX_SPP}], got {}",
+                args.spp
+            );
             let scene = load_scene(path)?;
             let sets = scene_rays(&scene, args.spp)?;
             let stats = scene.accel().stats();
@@ -154,10 +159,6 @@ pub fn run(args: &RaysBenchArgs) -> anyhow::Result<()> {
 /// The rays a render of `scene` at `spp` samples per pixel casts: camera and
 /// continuation rays (closest hit), shadow rays (occlusion).
 fn scene_rays(scene: &epsm_render::Scene, spp: u32) -> anyhow::Result<Vec<RaySet>> {
-    anyhow::ensure!(
-        (1..=MAX_SPP).contains(&spp),
-        "--spp must be in [1, {MAX_SPP}], got {spp}"
-    );
     let opts = RenderOptions {
         spp,
         ..RenderOptions::from_scene(scene)
@@ -179,17 +180,17 @@ fn scene_rays(scene: &epsm_render::Scene, spp: u32) -> anyhow::Result<Vec<RaySet
         RaySet {
             name: "camera",
             rays: log.camera,
-            occlusion: false,
+            queries: &[false],
         },
         RaySet {
             name: "bounce",
             rays: log.bounce,
-            occlusion: false,
+            queries: &[false],
         },
         RaySet {
             name: "shadow",
             rays: log.shadow,
-            occlusion: true,
+            queries: &[true],
         },
     ])
 }
@@ -231,16 +232,11 @@ fn sphere(args: &RaysBenchArgs) -> anyhow::Result<()> {
         })
         .collect();
     let incoherent = scene::random_rays(args.rays, lo, hi);
-    let mut sets = Vec::new();
-    for (name, rays) in [("coherent", coherent), ("incoherent", incoherent)] {
-        for occlusion in [false, true] {
-            sets.push(RaySet {
-                name,
-                rays: rays.clone(),
-                occlusion,
-            });
-        }
-    }
+    let sets = [("coherent", coherent), ("incoherent", incoherent)].map(|(name, rays)| RaySet {
+        name,
+        rays,
+        queries: &[false, true],
+    });
     let stats = accel.stats();
     let report = Report {
         scene: None,
@@ -271,9 +267,13 @@ fn throughputs(
         .collect::<Result<Vec<_>, _>>()?;
     let mut throughput = Vec::new();
     for (&threads, pool) in thread_counts.iter().zip(&pools) {
-        for set in sets.iter().filter(|s| !s.rays.is_empty()) {
+        let walks = sets
+            .iter()
+            .filter(|s| !s.rays.is_empty())
+            .flat_map(|s| s.queries.iter().map(move |&occlusion| (s, occlusion)));
+        for (set, occlusion) in walks {
             let runs = (0..args.repeat.max(1))
-                .map(|_| pool.install(|| measure(accel, &set.rays, set.occlusion)));
+                .map(|_| pool.install(|| measure(accel, &set.rays, occlusion)));
             let best = runs.fold(None, |best: Option<Run>, run| match best {
                 Some(b) if b.seconds <= run.seconds => Some(b),
                 _ => Some(run),
@@ -288,7 +288,7 @@ fn throughputs(
                 threads,
                 rays: set.name,
                 count: set.rays.len(),
-                query: if set.occlusion { "occluded" } else { "closest" },
+                query: if occlusion { "occluded" } else { "closest" },
                 mrays_per_s: rays / seconds / 1e6,
                 mrays_per_cpu_s: cpu_seconds.map(|c| rays / c / 1e6),
                 hit_fraction: hits as f64 / rays,

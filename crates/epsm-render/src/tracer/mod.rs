@@ -451,8 +451,8 @@ fn camera_sample<'a>(
 }
 
 /// Traces a pixel sample from its [`camera_sample`] (box tests by `boxes`,
-/// rays reported to `sink`); returns its radiance (zero, counted, and its record marked dropped, when
-/// it was not finite).
+/// rays reported to `sink`); returns its radiance (zero, counted, and its
+/// record marked dropped, when it was not finite).
 #[inline(always)]
 fn trace_pixel_sample(
     scene: &Scene,
