@@ -293,6 +293,27 @@ fn bench_rays_on_a_scene_walks_the_rays_of_its_render() {
 }
 
 #[test]
+fn bench_ot_reports_the_exact_solvers_cold_starts() {
+    // The default blobs pair (n = 4096, seed 0) is well inside the warm start's range.
+    let run = epsm(&["bench", "ot", "--json"]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let report: serde_json::Value = serde_json::from_slice(&run.stdout).expect("one JSON object");
+    assert_eq!(report["solver"], "exact");
+    assert_eq!(report["n"], 4096);
+    assert_eq!(report["cold_starts"], 0, "{report}");
+    let run = epsm(&["bench", "ot", "--n", "256"]);
+    let line = String::from_utf8_lossy(&run.stdout);
+    assert!(
+        run.status.success() && line.contains(" cold_starts=0 "),
+        "{line}"
+    );
+}
+
+#[test]
 fn a_missing_file_is_reported_once_with_its_cause() {
     let run = epsm(&["render", "/nonexistent/scene.toml"]);
     let stderr = String::from_utf8_lossy(&run.stderr);

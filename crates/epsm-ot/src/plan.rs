@@ -86,11 +86,13 @@ pub struct SolveStats {
     pub candidate_pairs: usize,
     /// Pairs added because the optimality check found them violated (exact solver).
     pub added_pairs: usize,
-    /// Auctions stopped by their bid budget, whose prices were used as reached (exact solver).
+    /// Auctions stopped by their bid budget, whose prices were used as reached
+    /// (exact solver, and the exact solves of the entropic solver's `exact_prices`).
     pub auction_budget_stops: usize,
     /// Warm starts replaced by the cold start (zero potentials, candidates
     /// searched among all pairs) because the clouds were beyond the entropic
-    /// warm start's range or its potentials were not finite (exact solver).
+    /// warm start's range or its potentials were not finite (exact solver, and
+    /// the exact solves of the entropic solver's `exact_prices`).
     pub cold_starts: usize,
     /// L1 marginal error of the plan (entropic solver).
     pub marginal_error: Option<f64>,

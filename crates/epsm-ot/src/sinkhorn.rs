@@ -54,6 +54,7 @@ use crate::error::OtError;
 use crate::plan::{EntropicPlan, Matching, OtResult, PhaseTimes, SolveStats};
 use crate::points::{Point, PointCloud, check_pair};
 
+use dual::Guards;
 pub(crate) use dual::{Dual, polish, solve_dual};
 
 /// Smallest accepted `blur`. Below it the log-domain kernel breaks down: at
@@ -109,7 +110,9 @@ pub struct SinkhornSettings {
     /// Start the final-ε iterations from the exact assignment's dual potentials
     /// (which that solver finds by an ε-scaling Sinkhorn warm start and an
     /// auction) instead of running the fine phase of the ε-scaling schedule.
-    /// Same fixed point, far fewer Sinkhorn iterations at small blur.
+    /// Same fixed point, far fewer Sinkhorn iterations at small blur. The exact
+    /// solve's safeguards are counted in `SolveStats::auction_budget_stops`
+    /// and `SolveStats::cold_starts`.
     pub exact_prices: bool,
     /// Target mean points per cluster of the multiscale blocks (grid cells are
     /// widened until there are at most `2n / cluster_size` clusters; see `blocks`).
@@ -262,8 +265,10 @@ fn solve_one(
     let mut dual = if settings.exact_prices {
         // Start the final-ε iterations from the optimal assignment's dual potentials.
         let ex = crate::exact::solve_sorted(x, y, diam2, &crate::ExactSettings::default());
+        let guards = Guards::of_exact(&ex.stats);
         let mut phases = ex.stats.phases;
         let mut dual = polish(x, y, ex.u, ex.v, settings, ex.stats.pair_evaluations, 0);
+        dual.guards = guards;
         phases.merge(&dual.phases);
         dual.phases = phases;
         dual
@@ -324,19 +329,16 @@ pub fn solve(
         iterations: xy.dual.iterations,
         pair_evaluations: xy.pairs,
         marginal_error: Some(xy.dual.marginal_error),
-        bridged_corrections: xy.dual.guards.bridged_corrections,
-        clamped_corrections: xy.dual.guards.clamped_corrections,
         ..SolveStats::default()
     };
+    xy.dual.guards.add_to(&mut stats);
     let (loss, pull) = if settings.debias {
         let xx = solve_one(&x, &x, diameter_sq(source, source), settings)?;
         let yy = solve_one(&y, &y, diameter_sq(target, target), settings)?;
         stats.iterations += xx.dual.iterations + yy.dual.iterations;
         stats.pair_evaluations += xx.pairs + yy.pairs;
-        stats.bridged_corrections +=
-            xx.dual.guards.bridged_corrections + yy.dual.guards.bridged_corrections;
-        stats.clamped_corrections +=
-            xx.dual.guards.clamped_corrections + yy.dual.guards.clamped_corrections;
+        xx.dual.guards.add_to(&mut stats);
+        yy.dual.guards.add_to(&mut stats);
         phases.merge(&xx.dual.phases);
         phases.merge(&yy.dual.phases);
         let self_bary = x.unsort(&xx.barycentres);

@@ -19,6 +19,7 @@
 //! | `bridged_corrections` | coarse corrections whose cluster scaling converged only lumped per component of the support, with bridges between components, before the scale's support was rebuilt (sinkhorn) |
 //! | `clamped_corrections` | coarse corrections whose cluster scaling did not converge even lumped, applied clamped before the scale's support was rebuilt (sinkhorn) |
 //! | `auction_budget_stops` | auctions stopped by their bid budget, prices used as reached (exact) |
+//! | `cold_starts`      | entropic warm starts replaced by zero potentials on all pairs: clouds beyond the warm start's range or non-finite potentials (exact) |
 //! | `peak_rss_mb`      | peak resident memory of the process (VmHWM)                 |
 //! | `threads`          | rayon threads                                               |
 //! | `phases`           | seconds per named phase of the solve (see below)            |
@@ -90,6 +91,7 @@ struct Report {
     bridged_corrections: usize,
     clamped_corrections: usize,
     auction_budget_stops: usize,
+    cold_starts: usize,
     peak_rss_mb: Option<f64>,
     threads: usize,
     phases: BTreeMap<&'static str, f64>,
@@ -137,6 +139,7 @@ pub fn run(args: &OtBenchArgs) -> anyhow::Result<()> {
         bridged_corrections: result.stats.bridged_corrections,
         clamped_corrections: result.stats.clamped_corrections,
         auction_budget_stops: result.stats.auction_budget_stops,
+        cold_starts: result.stats.cold_starts,
         peak_rss_mb: super::peak_rss_mb(),
         threads: rayon::current_num_threads(),
         phases: result.stats.phases.iter().collect(),
@@ -145,7 +148,7 @@ pub fn run(args: &OtBenchArgs) -> anyhow::Result<()> {
         println!("{}", serde_json::to_string(&report)?);
     } else {
         println!(
-            "ot {} n={} {:.3}s loss={:.6} cost={:.6} marginal_error={} pairs/s={} peak={} MB",
+            "ot {} n={} {:.3}s loss={:.6} cost={:.6} marginal_error={} pairs/s={} cold_starts={} peak={} MB",
             report.solver,
             report.n,
             report.seconds,
@@ -157,6 +160,7 @@ pub fn run(args: &OtBenchArgs) -> anyhow::Result<()> {
             report
                 .pair_evals_per_s
                 .map_or("-".into(), |p| format!("{p:.3e}")),
+            report.cold_starts,
             report.peak_rss_mb.map_or("?".into(), |m| format!("{m:.1}")),
         );
     }

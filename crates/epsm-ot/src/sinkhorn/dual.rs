@@ -39,7 +39,7 @@ use super::anderson::{Anderson, Guarded};
 use super::coarse;
 use super::pass::{Cut, Level, coarse_cloud, softmin, softmin_blocks};
 use crate::blocks::{Clustered, Support, fit_potentials};
-use crate::plan::PhaseTimes;
+use crate::plan::{PhaseTimes, SolveStats};
 
 /// Dual potentials of one entropic problem, in the clusterings' orders.
 #[derive(Debug, Clone)]
@@ -51,13 +51,14 @@ pub(crate) struct Dual {
     pub iterations: usize,
     pub pairs: u64,
     pub marginal_error: f64,
-    /// What the safeguards of the fine phase did.
+    /// What the safeguards of the fine phase (or of the exact solve replacing it) did.
     pub guards: Guards,
     /// Wall-clock time of the coarse, fine and polish phases.
     pub phases: PhaseTimes,
 }
 
-/// Counts of the fine phase's safeguards.
+/// Counts of the safeguards of the fine phase, or of the exact solve that
+/// replaces it with `exact_prices`.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub(crate) struct Guards {
     /// Coarse corrections whose cluster scaling converged only with bridges between
@@ -66,6 +67,29 @@ pub(crate) struct Guards {
     /// Coarse corrections whose cluster scaling did not converge even with bridges,
     /// applied clamped (each followed by a rebuild of the scale's support).
     pub clamped_corrections: usize,
+    /// Auctions of the exact solve stopped by their bid budget (see `exact`).
+    pub auction_budget_stops: usize,
+    /// Exact solves whose entropic warm start was replaced by the cold start (see `exact`).
+    pub cold_starts: usize,
+}
+
+impl Guards {
+    /// The exact solve's counts from its `stats`.
+    pub fn of_exact(stats: &SolveStats) -> Self {
+        Self {
+            auction_budget_stops: stats.auction_budget_stops,
+            cold_starts: stats.cold_starts,
+            ..Self::default()
+        }
+    }
+
+    /// Adds these counts to the counters of the same names in `stats`.
+    pub fn add_to(self, stats: &mut SolveStats) {
+        stats.bridged_corrections += self.bridged_corrections;
+        stats.clamped_corrections += self.clamped_corrections;
+        stats.auction_budget_stops += self.auction_budget_stops;
+        stats.cold_starts += self.cold_starts;
+    }
 }
 
 /// The ε schedule of GeomLoss: `diameter²` down to `blur²` with ratio `scaling²`.

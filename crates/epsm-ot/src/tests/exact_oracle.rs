@@ -1,10 +1,12 @@
-//! The exact solver against brute force (n ≤ 8), the dense reference and the `lsap` crate.
+//! The exact solver against brute force (n ≤ 8), the dense reference and the `lsap` crate
+//! (also where the entropic solver's `exact_prices` runs it).
 
 use super::random_cloud;
 use crate::cost::{assignment_cost, diameter_sq, sq_dist_f64};
 use crate::exact::{self, ExactSettings, dense};
 use crate::plan::Matching;
 use crate::points::PointCloud;
+use crate::sinkhorn::{self, SinkhornSettings};
 use crate::synthetic::{Rng, blobs_pair};
 
 fn permutation(m: &Matching) -> Vec<usize> {
@@ -170,6 +172,56 @@ fn sparse_exact_cold_starts_beyond_the_warm_starts_range() {
         assert!(r.gradient.iter().flatten().all(|g| g.is_finite()));
         if scale > 1e30 {
             assert!(diameter_sq(&s, &t) > 0.5 * exact::MAX_DIAMETER_SQ);
+        }
+    }
+}
+
+#[test]
+fn sinkhorn_exact_prices_cold_starts_and_counts_it() {
+    // At blur 1 the entropic solve accepts clouds spread over [0, 1e18]⁵,
+    // beyond the range of the exact solve's own warm start (blur 0.03), so
+    // `exact_prices` runs that solve from the cold start; over [0, 1e15]⁵
+    // it warm-starts. The old code solved both, but dropped the exact solve's
+    // counters (cold_starts and auction_budget_stops were always 0).
+    let mut rng = Rng::new(10);
+    for (scale, cold_starts) in [(1e15, 0), (1e18, 1)] {
+        let (s, t) = (
+            random_cloud(&mut rng, 100, scale),
+            random_cloud(&mut rng, 100, scale),
+        );
+        let ex = exact::solve(&s, &t, &ExactSettings::default()).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(ex.stats.cold_starts, cold_starts, "scale {scale:e}");
+        let d = dense::solve(&s, &t).unwrap_or_else(|e| panic!("{e}"));
+        for debias in [false, true] {
+            let settings = SinkhornSettings {
+                blur: 1.0,
+                exact_prices: true,
+                debias,
+                ..SinkhornSettings::default()
+            };
+            let r = sinkhorn::solve(&s, &t, &settings).unwrap_or_else(|e| panic!("{e}"));
+            let Matching::Entropic(plan) = &r.matching else {
+                panic!("expected an entropic plan, got {:?}", r.matching);
+            };
+            let case = format!("scale {scale:e}, debias {debias}");
+            // Three exact solves when debiased (source–target, source–source,
+            // target–target): beyond the range, all three cold-start.
+            let solves = if debias { 3 } else { 1 };
+            assert_eq!(r.stats.cold_starts, solves * cold_starts, "{case}");
+            if !debias {
+                // The same exact solve as the exact matcher's, counters and all.
+                assert_eq!(r.stats.auction_budget_stops, ex.stats.auction_budget_stops);
+            }
+            // ε = 1 against costs of 1e30 and more: OT_ε is the optimal assignment cost.
+            assert!(
+                (r.loss - d.loss).abs() <= 1e-6 * d.loss,
+                "{case}: {:e} vs dense {:e}",
+                r.loss,
+                d.loss
+            );
+            let finite = |v: &[f64]| v.iter().all(|t| t.is_finite());
+            assert!(finite(&plan.f) && finite(&plan.g), "{case}");
+            assert!(r.gradient.iter().flatten().all(|g| g.is_finite()), "{case}");
         }
     }
 }
