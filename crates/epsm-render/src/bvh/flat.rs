@@ -64,25 +64,8 @@
 //! would lose pending nodes past the capacity, as obvhs's own walk does past
 //! 32 levels.
 //!
-//! **Exits.** A ray that starts inside a convex solid (a glass sphere after
-//! a refraction into it) has one hit on it, where it leaves: every box of
-//! the solid's subtree that its chord crosses holds a patch of the shell
-//! behind or beside it, and the nearest-first walk must visit them all
-//! before it may stop (9.3 nodes and 3.6 packet tests per such ray on
-//! `scenes/caustic-box.toml`, session 11). When the solid's triangles are
-//! exactly those below one node (`owned_subtrees`) and bound a convex solid
-//! (module `convex`), [`FlatBvh::trace_from`] walks that subtree
-//! farthest-entry first and stops at its first hit (5.0 nodes and 1.4
-//! packet tests per ray), and walks the rest of the tree as usual, so
-//! other geometry inside the solid is still found. The hit is the one the
-//! ordinary walk finds (the same triangle test; where two triangles share
-//! the exit point, either may be returned at the same `t` up to rounding).
-//! The tracer knows a ray is inside such a solid when its last scattering
-//! sent it to the back of the solid's surface (`Accel::exit_of`).
-//!
 //! No parameters.
 
-use std::collections::HashMap;
 use std::mem::MaybeUninit;
 
 use super::blas::SlotTriangles;
@@ -209,77 +192,6 @@ impl FlatBvh {
         self.nodes.len() * size_of::<FlatNode>() + self.packets.len() * size_of::<TrianglePacket>()
     }
 
-    /// For each owner (triangle ids mapped to owners by `owner`) whose
-    /// triangles are exactly those below one node, that node, as
-    /// `(owner, node)` pairs: the `exit` nodes of [`FlatBvh::trace_from`].
-    pub fn owned_subtrees(&self, owner: impl Fn(u32) -> u32) -> Vec<(u32, u32)> {
-        /// The one owner of the triangles below `node` and their count
-        /// (`None`: several owners, or none), memoised in `below`.
-        fn single(
-            bvh: &FlatBvh,
-            node: usize,
-            owner: &impl Fn(u32) -> u32,
-            below: &mut [Option<(u32, usize)>],
-        ) -> Option<(u32, usize)> {
-            let n = &bvh.nodes[node];
-            let packets = &bvh.packets[n.first_packet as usize..][..n.packet_count as usize];
-            let mut owners: Vec<(u32, usize)> = packets
-                .iter()
-                .flat_map(|p| {
-                    let lanes = p.lanes_of(0xff);
-                    (0..LANES as u32)
-                        .filter(move |l| lanes & (1 << l) != 0)
-                        .map(|l| (owner(p.id(l as usize)), 1))
-                })
-                .collect();
-            let mut mixed = false;
-            for c in (0..8).filter(|&c| n.inner & (1 << c) != 0) {
-                match single(bvh, n.children[c] as usize, owner, below) {
-                    Some(child) => owners.push(child),
-                    None => mixed = true,
-                }
-            }
-            let first = owners.first()?.0;
-            let one = !mixed && owners.iter().all(|&(o, _)| o == first);
-            below[node] = one.then(|| (first, owners.iter().map(|&(_, k)| k).sum()));
-            below[node]
-        }
-        if self.nodes.is_empty() {
-            return Vec::new();
-        }
-        let mut below = vec![None; self.nodes.len()];
-        single(self, 0, &owner, &mut below);
-        // The topmost single-owner nodes: the root, or children of a node
-        // with several owners.
-        let mut tops: Vec<(u32, u32, usize)> =
-            below[0].map(|(o, k)| (o, 0, k)).into_iter().collect();
-        let mixed = self
-            .nodes
-            .iter()
-            .enumerate()
-            .filter(|&(i, _)| below[i].is_none());
-        for (_, n) in mixed {
-            for c in (0..8).filter(|&c| n.inner & (1 << c) != 0) {
-                let child = n.children[c];
-                if let Some((o, k)) = below[child as usize] {
-                    tops.push((o, child, k));
-                }
-            }
-        }
-        // Kept when the node holds all of its owner's triangles.
-        let mut totals: HashMap<u32, usize> = HashMap::new();
-        for p in &self.packets {
-            let lanes = p.lanes_of(0xff);
-            for l in (0..LANES).filter(|l| lanes & (1 << l) != 0) {
-                *totals.entry(owner(p.id(l))).or_default() += 1;
-            }
-        }
-        tops.iter()
-            .filter(|&&(o, _, k)| totals[&o] == k)
-            .map(|&(o, node, _)| (o, node))
-            .collect()
-    }
-
     /// The most stack entries a walk can hold at once (at most [`STACK`]
     /// for the walk to be exact).
     #[cfg(test)]
@@ -303,26 +215,11 @@ impl FlatBvh {
     /// with `t` in `[t_min, t_max]` (lowering `ray.t_max` to it), with `ANY`
     /// the first hit found.
     #[inline(always)]
+    #[allow(unsafe_code)]
     pub fn trace<const ANY: bool>(
         &self,
         ray: &mut TraceRay,
         boxes: impl BoxTest,
-    ) -> Option<FlatHit> {
-        self.trace_from::<ANY>(ray, boxes, None)
-    }
-
-    /// [`FlatBvh::trace`], for a ray whose origin lies inside the convex
-    /// closed mesh whose triangles are exactly those below node `exit` if
-    /// given (an entry of [`FlatBvh::owned_subtrees`]): that subtree is
-    /// walked by [`FlatBvh::exit_walk`], the rest as usual. Inlined with
-    /// `exit` a constant `None`, the check compiles away.
-    #[inline(always)]
-    #[allow(unsafe_code)]
-    pub fn trace_from<const ANY: bool>(
-        &self,
-        ray: &mut TraceRay,
-        boxes: impl BoxTest,
-        exit: Option<u32>,
     ) -> Option<FlatHit> {
         if self.nodes.is_empty() {
             return None;
@@ -332,152 +229,89 @@ impl FlatBvh {
         let mut depth = 0usize;
         let mut node = 0usize;
         loop {
-            if exit.is_some_and(|e| node == e as usize) {
-                if let Some(hit) = self.exit_walk(node, ray, boxes) {
-                    best = Some(hit);
-                    if ANY {
-                        return best;
-                    }
-                }
-            } else {
-                // SAFETY: `node` is the root (`nodes` is not empty) or a
-                // child index of a node, below `nodes.len()` (asserted by
-                // `FlatBvh::new`; nothing changes the nodes after).
-                let n = unsafe { self.nodes.get_unchecked(node) };
-                let hits = boxes.hits(&n.boxes, ray);
-                // Leaf children first: their hits lower `t_max`, which culls
-                // the inner children below.
-                leaf_hits!(self, n, hits, ray, boxes, best, ANY);
-                push_inner!(stack, depth, n, hits, ray.t_max, <);
-            }
-            // The nearest pending node not culled by `t_max`.
-            node = pop!(stack, depth, ray.t_max, return best);
-        }
-    }
-
-    /// The first hit found below node `root`, children visited farthest
-    /// entry first (lowering `ray.t_max` to it): for a ray inside the convex
-    /// closed mesh whose triangles are exactly those below `root`, its only
-    /// hit, the exit (module docs).
-    #[inline(always)]
-    #[allow(unsafe_code)]
-    fn exit_walk(&self, root: usize, ray: &mut TraceRay, boxes: impl BoxTest) -> Option<FlatHit> {
-        let mut best;
-        let mut stack = [MaybeUninit::<(u32, f32)>::uninit(); STACK];
-        let mut depth = 0usize;
-        let mut node = root;
-        loop {
-            // SAFETY: as in `trace_from`: `root` is a node index
-            // (`owned_subtrees`), the others child indices.
+            // SAFETY: `node` is the root (`nodes` is not empty) or a child
+            // index of a node, below `nodes.len()` (asserted by
+            // `FlatBvh::new`; nothing changes the nodes after).
             let n = unsafe { self.nodes.get_unchecked(node) };
             let hits = boxes.hits(&n.boxes, ray);
-            leaf_hits!(self, n, hits, ray, boxes, best, true);
-            push_inner!(stack, depth, n, hits, ray.t_max, >);
-            node = pop!(stack, depth, ray.t_max, return None);
+            // Leaf children first: their hits lower `t_max`, which culls the
+            // inner children below.
+            let leaves = hits.mask & u32::from(n.leaves);
+            let first = n.first_packet as usize;
+            let node_packets = if leaves == 0 {
+                &[][..]
+            } else {
+                // SAFETY: `FlatBvh::new` gives each node the run of packets
+                // it pushes right then (`first_packet` and `packet_count`),
+                // inside `packets`, and nothing changes them after.
+                unsafe {
+                    self.packets
+                        .get_unchecked(first..first + n.packet_count as usize)
+                }
+            };
+            // Byte `p`: the leaf children hit with a triangle in packet `p`.
+            let mut packet_leaves = n.packet_children & (leaves * 0x0101_0101);
+            for packet in node_packets {
+                let hit_children = packet_leaves & 0xff;
+                packet_leaves >>= 8;
+                if hit_children == 0 {
+                    continue;
+                }
+                let lanes = packet.lanes_of(hit_children);
+                let Some(hit) = boxes.packet_hit(packet, ray, lanes) else {
+                    continue;
+                };
+                ray.t_max = hit.t;
+                best = Some(FlatHit {
+                    id: packet.id(hit.lane),
+                    t: hit.t,
+                    b1: hit.b1,
+                    b2: hit.b2,
+                });
+                if ANY {
+                    return best;
+                }
+            }
+            // Inner children entered before `t_max`, sorted into the stack
+            // above the entries of earlier nodes: nearest on top.
+            let mut inner = hits.mask & u32::from(n.inner);
+            let base = depth;
+            while inner != 0 {
+                let child = inner.trailing_zeros() as usize;
+                inner &= inner - 1;
+                let entry = hits.entry.0[child];
+                if entry > ray.t_max || depth >= STACK {
+                    continue;
+                }
+                let mut at = depth;
+                // SAFETY: entries below `depth` have been written (`at - 1`
+                // is in `base..depth`).
+                while at > base && unsafe { stack[at - 1].assume_init().1 } < entry {
+                    stack[at] = stack[at - 1];
+                    at -= 1;
+                }
+                stack[at] = MaybeUninit::new((n.children[child], entry));
+                depth += 1;
+            }
+            // The nearest pending node not culled by `t_max`.
+            loop {
+                if depth == 0 {
+                    return best;
+                }
+                // `depth ≤ STACK`, so the mask keeps `depth − 1` (and saves
+                // a bounds check).
+                depth = (depth - 1) & (STACK - 1);
+                // SAFETY: `depth` only grows right after a write at or below
+                // it, so every entry below the old `depth` has been written.
+                let (next, entry) = unsafe { stack[depth].assume_init() };
+                if entry <= ray.t_max {
+                    node = next as usize;
+                    break;
+                }
+            }
         }
     }
 }
-
-/// The packets of node `$n`'s leaf children whose boxes `$hits` says the
-/// ray enters, tested in order, each hit lowering `$ray.t_max` and
-/// replacing `$best`; when `$first`, the first hit returns `$best`. A macro,
-/// not a function: a function returning the hit compiled the walks inlined
-/// into the tile loop to 1.9–3.5 % more instructions per sample
-/// (`scenes/caustic-box.toml`).
-macro_rules! leaf_hits {
-    ($bvh:expr, $n:expr, $hits:expr, $ray:expr, $boxes:expr, $best:ident, $first:expr) => {
-        let leaves = $hits.mask & u32::from($n.leaves);
-        let first = $n.first_packet as usize;
-        let node_packets = if leaves == 0 {
-            &[][..]
-        } else {
-            // SAFETY: `FlatBvh::new` gives each node the run of packets it
-            // pushes right then (`first_packet` and `packet_count`), inside
-            // `packets`, and nothing changes them after.
-            unsafe {
-                $bvh.packets
-                    .get_unchecked(first..first + $n.packet_count as usize)
-            }
-        };
-        // Byte `p`: the leaf children hit with a triangle in packet `p`.
-        let mut packet_leaves = $n.packet_children & (leaves * 0x0101_0101);
-        for packet in node_packets {
-            let hit_children = packet_leaves & 0xff;
-            packet_leaves >>= 8;
-            if hit_children == 0 {
-                continue;
-            }
-            let lanes = packet.lanes_of(hit_children);
-            let Some(hit) = $boxes.packet_hit(packet, $ray, lanes) else {
-                continue;
-            };
-            $ray.t_max = hit.t;
-            $best = Some(FlatHit {
-                id: packet.id(hit.lane),
-                t: hit.t,
-                b1: hit.b1,
-                b2: hit.b2,
-            });
-            if $first {
-                return $best;
-            }
-        }
-    };
-}
-use leaf_hits;
-
-/// Pushes node `$n`'s inner children whose boxes `$hits` says the ray enters
-/// before `$t_max` onto `$stack` (`$depth` entries), sorted above the
-/// entries of earlier nodes by entry distance: an entry sinks below those
-/// whose distance compares `$order` its own (`<`: nearest on top, `>`:
-/// farthest on top).
-macro_rules! push_inner {
-    ($stack:ident, $depth:ident, $n:expr, $hits:expr, $t_max:expr, $order:tt) => {
-        let mut inner = $hits.mask & u32::from($n.inner);
-        let base = $depth;
-        while inner != 0 {
-            let child = inner.trailing_zeros() as usize;
-            inner &= inner - 1;
-            let entry = $hits.entry.0[child];
-            if entry > $t_max || $depth >= STACK {
-                continue;
-            }
-            let mut at = $depth;
-            // SAFETY: entries below `depth` have been written (`at - 1` is
-            // in `base..depth`).
-            while at > base && unsafe { $stack[at - 1].assume_init().1 } $order entry {
-                $stack[at] = $stack[at - 1];
-                at -= 1;
-            }
-            $stack[at] = MaybeUninit::new(($n.children[child], entry));
-            $depth += 1;
-        }
-    };
-}
-use push_inner;
-
-/// The top pending node of `$stack` (`$depth` entries) not culled by
-/// `$t_max`, popping it and the culled ones above it; `$empty` (which must
-/// diverge) when none is left.
-macro_rules! pop {
-    ($stack:ident, $depth:ident, $t_max:expr, $empty:expr) => {
-        loop {
-            if $depth == 0 {
-                $empty;
-            }
-            // `depth ≤ STACK`, so the mask keeps `depth − 1` (and saves a
-            // bounds check).
-            $depth = ($depth - 1) & (STACK - 1);
-            // SAFETY: `depth` only grows right after a write at or below it,
-            // so every entry below the old `depth` has been written.
-            let (next, entry) = unsafe { $stack[$depth].assume_init() };
-            if entry <= $t_max {
-                break next as usize;
-            }
-        }
-    };
-}
-use pop;
 
 #[cfg(test)]
 mod tests {

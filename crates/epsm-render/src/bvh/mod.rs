@@ -27,7 +27,6 @@
 //! No parameters.
 
 mod blas;
-mod convex;
 mod flat;
 mod node;
 mod packet;
@@ -281,44 +280,16 @@ impl Accel {
     }
 
     /// [`Accel::closest_hit`] with box tests by `boxes` (the tracer passes
-    /// the widest its CPU has once per tile), for a ray whose origin lies
-    /// inside the object of exit node `inside` if given
-    /// ([`Accel::exit_of`]): the same hit, found with the exit walk through
-    /// that object ([`FlatBvh`](flat::FlatBvh)`::trace_from`).
+    /// the widest its CPU has once per tile).
     #[inline(always)]
-    pub(crate) fn closest_hit_with(
-        &self,
-        ray: &Ray,
-        inside: Option<u32>,
-        boxes: impl BoxTest,
-    ) -> Option<Hit> {
-        match inside {
-            None => self.trace::<false>(ray, boxes, None),
-            Some(exit) => self.trace_inside(ray, exit, boxes),
-        }
-    }
-
-    /// The exit walk of [`Accel::closest_hit_with`], out of line: rays
-    /// inside objects are few, and the walks inlined into the tile loop
-    /// keep their registers.
-    #[inline(always)]
-    fn trace_inside(&self, ray: &Ray, exit: u32, boxes: impl BoxTest) -> Option<Hit> {
-        self.trace::<false>(ray, boxes, Some(exit))
-    }
-
-    /// The exit node of a ray inside `object` when `object` is static and
-    /// bounds a convex solid whose triangles fill one subtree of the static
-    /// BVH (module `convex`): a ray leaving one of its triangles to the back
-    /// of the geometric normal is inside it.
-    #[inline(always)]
-    pub(crate) fn exit_of(&self, object: ObjectId) -> Option<u32> {
-        self.world.as_deref()?.exit(object)
+    pub(crate) fn closest_hit_with(&self, ray: &Ray, boxes: impl BoxTest) -> Option<Hit> {
+        self.trace::<false>(ray, boxes)
     }
 
     /// [`Accel::occluded`] with box tests by `boxes`.
     #[inline(always)]
     pub(crate) fn occluded_with(&self, ray: &Ray, boxes: impl BoxTest) -> bool {
-        self.trace::<true>(ray, boxes, None).is_some()
+        self.trace::<true>(ray, boxes).is_some()
     }
 
     /// [`Accel::trace`] with the widest box tests this CPU has.
@@ -328,7 +299,7 @@ impl Accel {
         if let Some(avx) = Avx::detect() {
             return self.trace_avx::<ANY>(ray, avx);
         }
-        self.trace::<ANY>(ray, Portable, None)
+        self.trace::<ANY>(ray, Portable)
     }
 
     /// [`Accel::trace`] with AVX box tests, compiled with AVX enabled so
@@ -338,7 +309,7 @@ impl Accel {
     fn trace_avx<const ANY: bool>(&self, ray: &Ray, avx: Avx) -> Option<Hit> {
         #[target_feature(enable = "avx")]
         fn with_avx<const ANY: bool>(accel: &Accel, ray: &Ray, avx: Avx) -> Option<Hit> {
-            accel.trace::<ANY>(ray, avx, None)
+            accel.trace::<ANY>(ray, avx)
         }
         // SAFETY: `with_avx` requires only AVX, and an `Avx` token exists
         // only on a CPU found to have it.
@@ -347,15 +318,9 @@ impl Accel {
 
     /// Traces `ray` through the static BVH and then the top level: the
     /// closest hit, or with `ANY` the first hit found (whose barycentrics are
-    /// then meaningless). `exit`: the exit node of the static object the ray
-    /// starts inside, if any ([`Accel::exit_of`]).
+    /// then meaningless).
     #[inline(always)]
-    fn trace<const ANY: bool>(
-        &self,
-        ray: &Ray,
-        boxes: impl BoxTest,
-        exit: Option<u32>,
-    ) -> Option<Hit> {
+    fn trace<const ANY: bool>(&self, ray: &Ray, boxes: impl BoxTest) -> Option<Hit> {
         let mut world = TraceRay::new(
             Vec3A::from(ray.origin),
             Vec3A::from(ray.dir),
@@ -365,7 +330,7 @@ impl Accel {
         let mut best = None;
         let mut found = Found::Nothing;
         if let Some(statics) = self.world.as_deref()
-            && let Some(flat) = statics.bvh.trace_from::<ANY>(&mut world, boxes, exit)
+            && let Some(flat) = statics.bvh.trace::<ANY>(&mut world, boxes)
         {
             found = Found::World(statics);
             best = Some(flat);
@@ -529,129 +494,18 @@ mod tests {
             if i % 3 == 0 {
                 ray.t_max = rng.range(0.0, 4.0) as f32;
             }
-            let portable = accel.trace::<false>(&ray, Portable, None);
+            let portable = accel.trace::<false>(&ray, Portable);
             assert_eq!(
-                accel.trace::<false>(&ray, avx, None),
+                accel.trace::<false>(&ray, avx),
                 portable,
                 "ray {i}: {ray:?}"
             );
-            let any = accel.trace::<true>(&ray, Portable, None).is_some();
-            assert_eq!(accel.trace::<true>(&ray, avx, None).is_some(), any);
+            let any = accel.trace::<true>(&ray, Portable).is_some();
+            assert_eq!(accel.trace::<true>(&ray, avx).is_some(), any);
             assert_eq!(any, portable.is_some());
             hits += usize::from(portable.is_some());
             occluded += usize::from(any);
         }
         assert!(hits > 2000 && occluded == hits, "{hits} hits");
-    }
-
-    /// Two glass-like spheres and a cube, a tilted floor cutting through
-    /// the big sphere and the cube, and a wall: the spheres get exits (the
-    /// 12-triangle cube shares its subtree with other triangles here, so it
-    /// has none), the rectangles none; rays from inside an object (origins
-    /// inside, any direction, some with `t_max` short of the exit) find with
-    /// the exit walk exactly the hits of the ordinary walk, the floor inside
-    /// the big sphere included.
-    #[test]
-    fn exit_walks_find_the_closest_hit() {
-        use crate::scene::desc::ShapeKind;
-        use crate::scene::shapes::build;
-        let place = |mesh: Mesh, scale: f64, at: DVec3| Object {
-            name: String::new(),
-            mesh: Arc::new(mesh),
-            world_from_object: DAffine3::from_scale_rotation_translation(
-                DVec3::splat(scale),
-                DQuat::from_axis_angle(DVec3::new(1.0, 2.0, 3.0).normalize(), 0.7),
-                at,
-            ),
-            material: 0,
-            emission: None,
-        };
-        let objects = vec![
-            place(
-                build(ShapeKind::Rectangle, None),
-                3.0,
-                DVec3::new(0.0, -1.0, 0.0),
-            ),
-            place(
-                build(ShapeKind::Sphere, Some(4)),
-                0.8,
-                DVec3::new(-0.5, 0.0, 0.2),
-            ),
-            place(
-                build(ShapeKind::Cube, None),
-                0.6,
-                DVec3::new(2.0, 0.8, -1.0),
-            ),
-            place(
-                build(ShapeKind::Sphere, Some(2)),
-                0.3,
-                DVec3::new(1.5, -0.2, 1.4),
-            ),
-            place(
-                build(ShapeKind::Rectangle, None),
-                2.0,
-                DVec3::new(0.0, 0.0, -2.0),
-            ),
-        ];
-        let accel = Accel::build(&objects);
-        let exits: Vec<_> = (0..objects.len() as u32)
-            .map(|o| accel.exit_of(o))
-            .collect();
-        let has: Vec<_> = exits.iter().map(Option::is_some).collect();
-        assert_eq!(has, [false, true, false, true, false], "{exits:?}");
-        let mut rng = Rng::new(23);
-        let mut compared = [0; 3];
-        for i in 0..40_000 {
-            let object = [1, 2, 3][i % 3];
-            let centre = objects[object].world_from_object.translation;
-            let radius = if object == 2 {
-                0.55
-            } else {
-                objects[object].world_from_object.matrix3.x_axis.length() * 0.95
-            };
-            // Inside the sphere, or the cube's inscribed ball.
-            let origin = centre + rng.unit() * radius * rng.range(0.0, 1.0).cbrt();
-            let mut ray = Ray::new(
-                origin.as_vec3(),
-                rng.unit().as_vec3() * rng.range(0.5, 2.0) as f32,
-            );
-            if i % 4 == 0 {
-                ray.t_max = rng.range(0.0, 0.5) as f32;
-            }
-            let plain = accel.trace::<false>(&ray, Portable, None);
-            let exit = exits[object];
-            assert_eq!(
-                accel.closest_hit_with(&ray, exit, Portable),
-                plain,
-                "ray {i}: {ray:?}"
-            );
-            #[cfg(target_arch = "x86_64")]
-            if let Some(avx) = Avx::detect() {
-                assert_eq!(
-                    accel.closest_hit_with(&ray, exit, avx),
-                    plain,
-                    "ray {i}: {ray:?}"
-                );
-            }
-            let k = match plain {
-                None => 0,
-                Some(h) if h.object as usize == object => 1,
-                Some(_) => 2,
-            };
-            compared[k] += 1;
-        }
-        // Misses (short rays), exits, and hits on the floor inside.
-        assert!(compared.iter().all(|&c| c > 2000), "{compared:?}");
-    }
-
-    /// The glass spheres of the shipped scenes get exits.
-    #[test]
-    fn shipped_glass_spheres_have_exits() {
-        for file in ["caustic-box", "cornell-box"] {
-            let path = format!("{}/../../scenes/{file}.toml", env!("CARGO_MANIFEST_DIR"));
-            let scene = crate::scene::load_scene(std::path::Path::new(&path)).expect("scene");
-            let sphere = scene.object_id("sphere").expect("a sphere");
-            assert!(scene.accel().exit_of(sphere).is_some(), "{file}");
-        }
     }
 }

@@ -54,12 +54,6 @@ pub(crate) struct ShadingTriangle {
 }
 
 impl ShadingTriangle {
-    /// Whether the geometric normal is on the front side of the winding
-    /// (not flipped toward a constant shading normal).
-    pub fn faces_winding(&self) -> bool {
-        self.ng.dot(self.e1.cross(self.e2)) > 0.0
-    }
-
     /// The shading data of `triangle` of `object`, whose world-space vertices
     /// are `world` (`f64`) and whose normals map to world space by
     /// `normal_from_object`.

@@ -26,7 +26,6 @@ use glam::{DMat3, Vec3A};
 use obvhs::BvhBuildParams;
 
 use super::blas::SlotTriangles;
-use super::convex;
 use super::flat::FlatBvh;
 use super::shading::ShadingTriangle;
 use super::triangle::PackedTriangle;
@@ -52,11 +51,6 @@ pub(crate) struct WorldBlas {
     shading: Vec<ShadingTriangle>,
     /// Input triangles left out (degenerate or singular placement).
     pub left_out: usize,
-    /// Per object id, the node of `bvh` whose subtree holds exactly that
-    /// object's triangles, when they bound a convex solid with their fronts
-    /// (and geometric normals) outward: the exit node of a ray inside it
-    /// (module `convex`, [`FlatBvh::trace_from`]).
-    exits: Vec<Option<u32>>,
 }
 
 impl WorldBlas {
@@ -67,16 +61,11 @@ impl WorldBlas {
         let mut shading = Vec::new();
         let mut world = Vec::new();
         let mut inputs = 0;
-        // Per object id, the range of its triangles in `world` when every
-        // one is kept with its geometric normal on its front: candidates for
-        // exits.
-        let mut whole = vec![None; objects.len()];
         for &id in members {
             let object = &objects[id as usize];
             let mesh = &object.mesh;
             let normal_from_object: DMat3 = object.world_from_object.matrix3.inverse().transpose();
             inputs += mesh.len();
-            let first = world.len();
             for triangle in 0..mesh.len() as u32 {
                 let local = mesh.triangle(triangle);
                 if PackedTriangle::new(local.map(Vec3A::from)).is_none() {
@@ -95,32 +84,15 @@ impl WorldBlas {
                     triangle,
                 });
             }
-            let kept = &shading[first..];
-            if kept.len() == mesh.len() && kept.iter().all(ShadingTriangle::faces_winding) {
-                whole[id as usize] = Some(first..world.len());
-            }
         }
-        let built = SlotTriangles::build(world.iter().copied(), BvhBuildParams::fast_build())?;
+        let built = SlotTriangles::build(world.into_iter(), BvhBuildParams::fast_build())?;
         let bvh = FlatBvh::new(&built);
         let left_out = inputs - bvh.len();
-        // Objects whose triangles fill one subtree and bound a convex solid
-        // exit through it.
-        let mut exits = vec![None; objects.len()];
-        for (object, node) in bvh.owned_subtrees(|index| refs[index as usize].object) {
-            let Some(range) = whole[object as usize].clone() else {
-                continue;
-            };
-            let triangles: Vec<_> = world[range].iter().map(|&(_, t)| t).collect();
-            if convex::bounds_convex_solid(&triangles) {
-                exits[object as usize] = Some(node);
-            }
-        }
         Some(Self {
             bvh,
             refs,
             shading,
             left_out,
-            exits,
         })
     }
 
@@ -139,12 +111,6 @@ impl WorldBlas {
         (source.object == object && source.triangle == triangle)
             .then(|| self.shading.get(index as usize))
             .flatten()
-    }
-
-    /// The exit node of a ray inside `object` (see `exits`), if it has one.
-    #[inline(always)]
-    pub fn exit(&self, object: ObjectId) -> Option<u32> {
-        self.exits.get(object as usize).copied().flatten()
     }
 
     /// Approximate heap size in bytes.

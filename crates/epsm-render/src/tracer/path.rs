@@ -57,9 +57,6 @@ pub(super) fn trace_path(
     // The previous vertex: position and the pdf of the direction it sampled
     // (`None` when that was a delta lobe or the camera: no MIS).
     let mut prev: Option<(Vec3, f32)> = None;
-    // The exit node of the convex object the ray starts inside, if known
-    // (it left that object's surface to the back: `Accel::exit_of`).
-    let mut inside: Option<u32> = None;
 
     // A path scatters at most `max_depth` times; the vertex its last
     // scattering reaches still adds what it emits (or the background seen),
@@ -72,7 +69,7 @@ pub(super) fn trace_path(
         sink.closest(depth, &ray);
 
         // Find the next vertex; rays that leave see the background.
-        let Some(hit) = scene.accel().closest_hit_with(&ray, inside, boxes) else {
+        let Some(hit) = scene.accel().closest_hit_with(&ray, boxes) else {
             let dir = ray.dir.normalize();
             let le = scene.background().eval(dir);
             if le != Vec3::ZERO {
@@ -194,9 +191,6 @@ pub(super) fn trace_path(
         }
         prev = Some((sp.p, bs.pdf)).filter(|_| !bs.lobe.is_delta());
         ray = Ray::new(leaving_origin(&sp, wo_ng), wo_world);
-        inside = (wo_ng < 0.0)
-            .then(|| scene.accel().exit_of(hit.object))
-            .flatten();
 
         // Russian roulette on the throughput with radiance scaling undone.
         if depth + 1 >= opts.rr_depth {
