@@ -23,6 +23,11 @@ use crate::error::{Error, Result, io_error};
 
 /// Opens the regular file at `path` for reading (module docs).
 pub fn open(path: &Path) -> Result<File> {
+    Ok(open_sized(path)?.0)
+}
+
+/// [`open`], and the file's length in bytes from the handle's metadata.
+fn open_sized(path: &Path) -> Result<(File, u64)> {
     if !std::fs::metadata(path).map_err(io_error(path))?.is_file() {
         return Err(not_a_file(path));
     }
@@ -30,13 +35,15 @@ pub fn open(path: &Path) -> Result<File> {
 }
 
 /// Opens `path` without blocking ([`open_nonblocking`]) and keeps the
-/// handle only if it is a regular file, by the handle's own metadata.
-fn open_regular(path: &Path) -> Result<File> {
+/// handle only if it is a regular file, by the handle's own metadata; with
+/// its length in bytes.
+fn open_regular(path: &Path) -> Result<(File, u64)> {
     let file = open_nonblocking(path).map_err(io_error(path))?;
-    if !file.metadata().map_err(io_error(path))?.is_file() {
+    let metadata = file.metadata().map_err(io_error(path))?;
+    if !metadata.is_file() {
         return Err(not_a_file(path));
     }
-    Ok(file)
+    Ok((file, metadata.len()))
 }
 
 /// Opens `path` for reading with `O_NONBLOCK`: a FIFO opens at once instead
@@ -72,11 +79,11 @@ pub fn read(path: &Path) -> Result<Vec<u8>> {
 /// The first `max` bytes of the regular file at `path` (all of them when it
 /// is shorter).
 pub fn read_capped(path: &Path, max: u64) -> Result<Vec<u8>> {
-    let file = open(path)?;
+    let (file, len) = open_sized(path)?;
     let mut bytes = Vec::new();
     // Room for the whole read up front, as `File::read_to_end` makes it (a
     // size hint: a failed reservation only means growing as it goes).
-    let size = file.metadata().map_err(io_error(path))?.len().min(max);
+    let size = len.min(max);
     let _ = bytes.try_reserve(usize::try_from(size).unwrap_or(usize::MAX));
     file.take(max)
         .read_to_end(&mut bytes)
@@ -138,10 +145,9 @@ mod tests {
         let bytes: Vec<u8> = (0..=255).cycle().take(100_000).collect();
         std::fs::write(&path, &bytes).expect("write");
         let mut read = Vec::new();
-        open_regular(&path)
-            .expect("a regular file opens")
-            .read_to_end(&mut read)
-            .expect("read");
+        let (mut file, len) = open_regular(&path).expect("a regular file opens");
+        assert_eq!(len, 100_000);
+        file.read_to_end(&mut read).expect("read");
         assert_eq!(read, bytes);
     }
 }
