@@ -15,7 +15,12 @@
 //! (closest hit), continuation rays (closest hit) and shadow rays
 //! (occlusion) are each walked back to back, in the order the render cast
 //! them: the walks without the shading between them, on the ray
-//! distribution of the path tracer itself.
+//! distribution of the path tracer itself. The walks are compiled as the
+//! render's tile loop is (`Accel::closest_hit`: AVX2 where the CPU has it).
+//!
+//! Each run walks its ray set again until 0.2 s have passed and reports
+//! the time per pass (a render's camera rays alone take a few
+//! milliseconds).
 //!
 //! | option | unit | default | range |
 //! |---|---|---|---|
@@ -54,6 +59,9 @@ const MAX_RAYS: usize = 1 << 25;
 const MAX_SPP: u32 = 4096;
 /// Most rays a logged render may cast (32 bytes each: 4 GB).
 const MAX_LOGGED_RAYS: u64 = 1 << 27;
+/// Shortest timed run: a run walks its ray set again until this long
+/// has passed, and reports the time per pass.
+const MIN_RUN_SECONDS: f64 = 0.2;
 
 /// Options of `epsm bench rays`.
 #[derive(clap::Args, Debug)]
@@ -351,31 +359,38 @@ pub(super) fn cpu_seconds() -> Option<f64> {
     Some(total as f64 * 1e-9)
 }
 
-/// Traces all rays in parallel chunks.
+/// Traces all rays in parallel chunks, in passes over the whole set until
+/// [`MIN_RUN_SECONDS`] have passed (a set of a few milliseconds, such as a
+/// small render's camera rays, would otherwise time thread start-up more
+/// than walks).
 fn measure(accel: &Accel, rays: &[Ray], occlusion: bool) -> Run {
     let cpu_start = cpu_seconds();
     let start = Instant::now();
-    let hits = rays
-        .par_chunks(1024)
-        .map(|chunk| {
-            chunk
-                .iter()
-                .filter(|ray| {
-                    if occlusion {
-                        accel.occluded(ray)
-                    } else {
-                        accel.closest_hit(ray).is_some()
-                    }
-                })
-                .count()
-        })
-        .sum();
-    let seconds = start.elapsed().as_secs_f64();
+    let (mut passes, mut hits) = (0u32, 0);
+    while passes == 0 || start.elapsed().as_secs_f64() < MIN_RUN_SECONDS {
+        hits = rays
+            .par_chunks(1024)
+            .map(|chunk| {
+                chunk
+                    .iter()
+                    .filter(|ray| {
+                        if occlusion {
+                            accel.occluded(ray)
+                        } else {
+                            accel.closest_hit(ray).is_some()
+                        }
+                    })
+                    .count()
+            })
+            .sum();
+        passes += 1;
+    }
+    let seconds = start.elapsed().as_secs_f64() / f64::from(passes);
     // The kernel updates a running thread's total at scheduler ticks (a few
     // ms), so very short runs may read zero: report nothing then.
     let cpu_seconds = cpu_seconds()
         .zip(cpu_start)
-        .map(|(end, start)| end - start)
+        .map(|(end, start)| (end - start) / f64::from(passes))
         .filter(|&c| c > 0.0);
     Run {
         seconds,

@@ -49,9 +49,9 @@ use crate::ray::Ray;
 use crate::scene::{Mesh, Object, ObjectId};
 use blas::Blas;
 use flat::FlatHit;
-#[cfg(target_arch = "x86_64")]
-pub(crate) use node::Avx;
 use node::TraceRay;
+#[cfg(target_arch = "x86_64")]
+pub(crate) use node::{Avx, Avx2};
 pub(crate) use node::{BoxTest, Portable};
 use tlas::{Instance, Tlas, Traced};
 use triangle::PackedTriangle;
@@ -266,7 +266,10 @@ impl Accel {
         self.stats
     }
 
-    /// The closest hit with `t` in `[ray.t_min, ray.t_max]`.
+    /// The closest hit with `t` in `[ray.t_min, ray.t_max]`, walked with the
+    /// code the renderer's tile loop uses (compiled for AVX2 where the CPU
+    /// has it, detected at run time), so a benchmark of these calls times
+    /// the render's walks.
     #[inline(always)]
     pub fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
         self.trace_detected::<false>(ray)
@@ -292,28 +295,30 @@ impl Accel {
         self.trace::<true>(ray, boxes).is_some()
     }
 
-    /// [`Accel::trace`] with the widest box tests this CPU has.
+    /// [`Accel::trace`] compiled as the tracer's tile loop is: for AVX2 with
+    /// AVX box tests where the CPU has them ([`Avx2`]), else portable.
     #[inline(always)]
     fn trace_detected<const ANY: bool>(&self, ray: &Ray) -> Option<Hit> {
         #[cfg(target_arch = "x86_64")]
-        if let Some(avx) = Avx::detect() {
-            return self.trace_avx::<ANY>(ray, avx);
+        if let Some(avx2) = Avx2::detect() {
+            return self.trace_avx2::<ANY>(ray, avx2);
         }
         self.trace::<ANY>(ray, Portable)
     }
 
-    /// [`Accel::trace`] with AVX box tests, compiled with AVX enabled so
-    /// they inline (`avx` proves the CPU has it).
+    /// [`Accel::trace`] compiled with the CPU features of [`Avx2`] (as the
+    /// tile loop), so the AVX box tests inline and the walk's bit scans are
+    /// single instructions (`avx2` proves the CPU has them).
     #[cfg(target_arch = "x86_64")]
     #[allow(unsafe_code)]
-    fn trace_avx<const ANY: bool>(&self, ray: &Ray, avx: Avx) -> Option<Hit> {
-        #[target_feature(enable = "avx")]
-        fn with_avx<const ANY: bool>(accel: &Accel, ray: &Ray, avx: Avx) -> Option<Hit> {
+    fn trace_avx2<const ANY: bool>(&self, ray: &Ray, avx2: Avx2) -> Option<Hit> {
+        #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
+        fn with_avx2<const ANY: bool>(accel: &Accel, ray: &Ray, avx: Avx) -> Option<Hit> {
             accel.trace::<ANY>(ray, avx)
         }
-        // SAFETY: `with_avx` requires only AVX, and an `Avx` token exists
-        // only on a CPU found to have it.
-        unsafe { with_avx::<ANY>(self, ray, avx) }
+        // SAFETY: `with_avx2` requires only the features it enables, and an
+        // `Avx2` token exists only on a CPU found to have each of them.
+        unsafe { with_avx2::<ANY>(self, ray, avx2.boxes()) }
     }
 
     /// Traces `ray` through the static BVH and then the top level: the

@@ -328,6 +328,38 @@ impl Avx {
     }
 }
 
+/// The tracer's CPU level: AVX2 and the bit-manipulation extensions every
+/// AVX2 CPU has (BMI1, BMI2, LZCNT, POPCNT), with [`Avx`] box tests. A value
+/// exists only on a CPU with all of them (see [`Avx2::detect`]), so code
+/// compiled with `#[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]`
+/// may be called while one is held. The tile loop and
+/// [`Accel::closest_hit`](super::Accel::closest_hit) both walk with this
+/// build where the CPU has it, and with [`Portable`] tests elsewhere.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Avx2(Avx);
+
+#[cfg(target_arch = "x86_64")]
+impl Avx2 {
+    /// The token, when the CPU has AVX, AVX2, BMI1, BMI2, LZCNT and POPCNT.
+    #[inline(always)]
+    pub fn detect() -> Option<Self> {
+        let avx = Avx::detect()?;
+        (std::arch::is_x86_feature_detected!("avx2")
+            && std::arch::is_x86_feature_detected!("bmi1")
+            && std::arch::is_x86_feature_detected!("bmi2")
+            && std::arch::is_x86_feature_detected!("lzcnt")
+            && std::arch::is_x86_feature_detected!("popcnt"))
+        .then_some(Self(avx))
+    }
+
+    /// Its AVX box and packet tests.
+    #[inline(always)]
+    pub fn boxes(self) -> Avx {
+        self.0
+    }
+}
+
 #[cfg(target_arch = "x86_64")]
 impl BoxTest for Avx {
     #[inline(always)]

@@ -21,7 +21,7 @@ mod path;
 use path::{Recording, trace_path};
 
 #[cfg(target_arch = "x86_64")]
-use crate::bvh::Avx;
+use crate::bvh::{Avx, Avx2};
 use crate::bvh::{BoxTest, Portable};
 use crate::camera::FilmRays;
 use crate::film::Image;
@@ -318,17 +318,11 @@ fn render_tile(
         return TileOutput { rays, ..out };
     }
     #[cfg(target_arch = "x86_64")]
-    if let Some(avx) = Avx::detect()
-        && std::arch::is_x86_feature_detected!("avx2")
-        && std::arch::is_x86_feature_detected!("bmi1")
-        && std::arch::is_x86_feature_detected!("bmi2")
-        && std::arch::is_x86_feature_detected!("lzcnt")
-        && std::arch::is_x86_feature_detected!("popcnt")
-    {
+    if let Some(avx2) = Avx2::detect() {
         // SAFETY: `render_tile_avx2` only requires the CPU features it
-        // enables, and the CPU was just found to have each of them (AVX2
-        // implies the AVX and SSE levels below it).
-        return unsafe { render_tile_avx2(scene, opts, level, tile, avx) };
+        // enables, and an `Avx2` exists only on a CPU found to have each of
+        // them (AVX2 implies the AVX and SSE levels below it).
+        return unsafe { render_tile_avx2(scene, opts, level, tile, avx2.boxes()) };
     }
     render_tile_body(scene, opts, level, tile, &mut NoSink, Portable)
 }
