@@ -82,6 +82,38 @@ fn optimize_writes_parseable_reports_and_resumes() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// README's main command, at the problem's shipped settings and seed: the
+/// light ends within 2 % of the box size (0.04) of the truth, the target of
+/// the caustic problem (six seeds measured 0.007–0.023; with Adam's default
+/// β1 and no `spp_match` it ended at 0.02–0.14).
+#[test]
+fn the_readmes_caustic_job_reaches_its_target() {
+    let dir = std::env::temp_dir().join(format!("epsm-readme-job-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let problem = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/problems/caustic.toml");
+    let run = epsm(&[
+        "optimize",
+        problem.to_str().expect("utf-8"),
+        "--out",
+        dir.to_str().expect("utf-8 path"),
+    ]);
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let error: f64 = stdout
+        .split("parameter error ")
+        .nth(1)
+        .and_then(|rest| rest.split_whitespace().next())
+        .and_then(|x| x.parse().ok())
+        .unwrap_or_else(|| panic!("no parameter error in {stdout}"));
+    assert!(error < 0.04, "parameter error {error}: {stdout}");
+    assert!(dir.join("report.png").is_file() && dir.join("run.csv").is_file());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn compare_under_a_time_budget_stops_every_method_at_the_budget() {
     let dir = std::env::temp_dir().join(format!("epsm-compare-cli-{}", std::process::id()));
