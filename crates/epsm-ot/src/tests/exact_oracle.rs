@@ -177,6 +177,38 @@ fn sparse_exact_cold_starts_beyond_the_warm_starts_range() {
 }
 
 #[test]
+fn the_auction_finishes_within_its_budget_at_any_scale() {
+    // The auction's ε is relative to the squared diameter. It was absolute
+    // (0.1 down to 1e-9): far below the rounding of prices near 1e30, so at
+    // spreads of 1e15 every auction ran out of bids (and the blobs pair
+    // already at ×1000), although the exact finish still made the matching optimal.
+    let (s, t) = blobs_pair(400, 3).unwrap_or_else(|| panic!("fixture"));
+    let mut rng = Rng::new(11);
+    let random = (
+        random_cloud(&mut rng, 200, 1.0),
+        random_cloud(&mut rng, 200, 1.0),
+    );
+    for (name, (s, t)) in [("blobs", (s, t)), ("random", random)] {
+        for scale in [1.0, 1e3, 1e15] {
+            let scaled = |c: &PointCloud| {
+                let points: Vec<_> = c.points().map(|p| p.map(|v| v * scale)).collect();
+                PointCloud::from_points(&points).unwrap_or_else(|e| panic!("{e}"))
+            };
+            let (s, t) = (scaled(&s), scaled(&t));
+            let r =
+                exact::solve(&s, &t, &ExactSettings::default()).unwrap_or_else(|e| panic!("{e}"));
+            let d = dense::solve(&s, &t).unwrap_or_else(|e| panic!("{e}"));
+            assert_eq!(r.stats.auction_budget_stops, 0, "{name} ×{scale:e}");
+            assert_eq!(
+                permutation(&r.matching),
+                permutation(&d.matching),
+                "{name} ×{scale:e}"
+            );
+        }
+    }
+}
+
+#[test]
 fn sinkhorn_exact_prices_cold_starts_and_counts_it() {
     // At a blur of 0.3 % of the spread the entropic solve accepts clouds spread
     // over [0, 1e18]⁵, beyond the range of the exact solve's own warm start
