@@ -64,7 +64,8 @@ pub enum OtError {
         /// The matcher: `exact`, `sinkhorn` or `sliced`.
         matcher: &'static str,
         /// What the matcher's arithmetic scales with: the squared diameter of
-        /// the two clouds together (exact, sinkhorn), or the squared norm
+        /// the two clouds together (exact; sinkhorn for its gradient), of the
+        /// two clouds each centred (sinkhorn's kernel), or the squared norm
         /// bound of their points (sliced, which projects absolute coordinates).
         extent_sq: f64,
         /// The squared length the extent is measured in: `min(ε, 1)` with
