@@ -2,8 +2,9 @@
 //!
 //! Every public solver entry point validates its input and returns an
 //! [`OtError`] instead of panicking: empty clouds, clouds of different sizes,
-//! ragged coordinate columns, non-finite coordinates, invalid settings, and
-//! clouds beyond a matcher's `f32` range.
+//! ragged coordinate columns, non-finite coordinates, invalid settings,
+//! clouds beyond a matcher's `f32` range, and entropic solves that ended
+//! with a non-finite loss, potential or marginal error.
 
 use thiserror::Error;
 

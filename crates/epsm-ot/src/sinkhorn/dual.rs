@@ -27,10 +27,14 @@
 //!    `ε`, Anderson-accelerated on `f` (see `anderson`; memory
 //!    `anderson_memory`, mixing `overrelaxation`), until the L1 error of the
 //!    source marginal is at most the tolerance (the target marginal is exact
-//!    after each `g` update). Anderson removes the slow large-scale modes that
+//!    after each `g` update; a NaN error is never within it, see [`converged`]).
+//!    Anderson removes the slow large-scale modes that
 //!    made over-relaxed Sinkhorn need ~200 updates at blur 0.01; if an
 //!    extrapolated step blows the error up (×10 over the best) the history is
-//!    dropped and the loop restarts from the best iterate.
+//!    dropped and the loop restarts from the best iterate. A polish that runs
+//!    out of updates first ends on one more target update, and the caller
+//!    counts it (`SolveStats::unconverged_solves`) or, for a non-finite
+//!    error, fails (`OtError::NotConverged`).
 
 use rayon::prelude::*;
 
