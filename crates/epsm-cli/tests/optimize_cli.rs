@@ -346,6 +346,24 @@ fn bench_ot_reports_the_exact_solvers_cold_starts() {
 }
 
 #[test]
+fn bench_ot_reports_unconverged_entropic_solves() {
+    let run = epsm(&[
+        "bench", "ot", "--solver", "sinkhorn", "--n", "256", "--json",
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let report: serde_json::Value = serde_json::from_slice(&run.stdout).expect("one JSON object");
+    assert_eq!(report["unconverged_solves"], 0, "{report}");
+    assert!(
+        report["marginal_error"].as_f64().is_some_and(|e| e <= 1e-3),
+        "{report}"
+    );
+}
+
+#[test]
 fn a_missing_file_is_reported_once_with_its_cause() {
     let run = epsm(&["render", "/nonexistent/scene.toml"]);
     let stderr = String::from_utf8_lossy(&run.stderr);

@@ -2,8 +2,9 @@
 //!
 //! Every public solver entry point validates its input and returns an
 //! [`OtError`] instead of panicking: empty clouds, clouds of different sizes,
-//! ragged coordinate columns, non-finite coordinates, invalid settings, and
-//! clouds beyond a matcher's `f32` range.
+//! ragged coordinate columns, non-finite coordinates, invalid settings,
+//! clouds beyond a matcher's `f32` range, and entropic solves that ended
+//! with a non-finite loss, potential or marginal error.
 
 use thiserror::Error;
 
@@ -64,7 +65,8 @@ pub enum OtError {
         /// The matcher: `exact`, `sinkhorn` or `sliced`.
         matcher: &'static str,
         /// What the matcher's arithmetic scales with: the squared diameter of
-        /// the two clouds together (exact, sinkhorn), or the squared norm
+        /// the two clouds together (exact; sinkhorn for its gradient), of the
+        /// two clouds each centred (sinkhorn's kernel), or the squared norm
         /// bound of their points (sliced, which projects absolute coordinates).
         extent_sq: f64,
         /// The squared length the extent is measured in: `min(ε, 1)` with
@@ -84,6 +86,32 @@ pub enum OtError {
         /// gradient, target order for `g`); `None` for the loss.
         index: Option<usize>,
     },
+    /// An entropic solve ended with a non-finite L1 marginal error: its plan is
+    /// not a transport plan at all (not a slow convergence, which is counted in
+    /// `SolveStats::unconverged_solves` instead).
+    ///
+    /// Seen where `diameter² / ε` is so large that the `f32` kernel cannot
+    /// resolve ε: a score `(g_j − c_ij)/ε` is rounded by up to about
+    /// `2⁻²⁴ diameter² / ε` (`rounding`), and at thousands of ε the marginal
+    /// error overflows. The problem is scale-covariant (points ×s, blur ×s: the
+    /// same plan), so only a larger blur relative to the spread helps.
+    #[error(
+        "the entropic solve did not converge: L1 marginal error {marginal_error} after \
+         {iterations} updates (tolerance {tolerance:e}); the clouds' squared diameter is \
+         {ratio:e} times ε = blur², so the f32 kernel rounds a score by up to {rounding:.1e} ε: \
+         raise `sinkhorn.blur` relative to the clouds' spread",
+        ratio = rounding * F32_RESOLUTION
+    )]
+    NotConverged {
+        /// The L1 marginal error reached (NaN or infinite).
+        marginal_error: f64,
+        /// The `sinkhorn.marginal_tolerance` it should have met.
+        tolerance: f64,
+        /// Sinkhorn updates done.
+        iterations: usize,
+        /// `2⁻²⁴ diameter² / ε`: the `f32` rounding of the largest kernel scores, in units of ε.
+        rounding: f64,
+    },
     /// A source point's row of the entropic plan has no mass (no target
     /// streamed, or no finite kernel score), so its barycentre is undefined.
     #[error("a source point's row of the entropic plan has no finite mass at ε = {eps:e}")]
@@ -92,6 +120,10 @@ pub enum OtError {
         eps: f64,
     },
 }
+
+/// `2²⁴`: the resolution of an `f32` significand, which turns `diameter² / ε`
+/// into [`OtError::NotConverged`]'s `rounding` and back.
+pub(crate) const F32_RESOLUTION: f64 = 16_777_216.0;
 
 /// What else, besides rescaling, brings clouds back within `matcher`'s range.
 fn spread_remedy(matcher: &str) -> &'static str {

@@ -19,7 +19,12 @@
 //!    perfect matching (grid order) so the graph always has one.
 //! 3. **Sparse solve**: an ε-scaling auction from prices `−g` finds near-optimal
 //!    potentials (`auction`; a phase that runs out of its bid budget keeps the
-//!    prices it reached, counted in `SolveStats::auction_budget_stops`), then
+//!    prices it reached, counted in `SolveStats::auction_budget_stops`). Its ε
+//!    is relative: the settings times the clouds' squared diameter, the scale
+//!    of costs and prices. (An absolute ε of 1e-9 fell below the rounding of
+//!    prices near 1e30, so at spreads of 1e15 every auction ran out of bids,
+//!    and on the blobs pair already at ×1000, though the exact finish still
+//!    found the optimum.) Then
 //!    shortest augmenting paths make the
 //!    matching exactly complementary-slack with them (`sparse`). Whenever
 //!    more than 1/16 of the rows are unmatched (after step 4 added violated
@@ -40,8 +45,8 @@
 //! | `exact.dense_below`    | use the dense O(n³) solver below this n    | 64      |
 //! | `exact.candidates`     | candidate targets per point (and sources per target) | 8 |
 //! | `exact.tolerance`      | reduced cost counted as a violation below −tolerance | 1e-11 |
-//! | `exact.auction_start`  | first ε of the auction                     | 0.1     |
-//! | `exact.auction_end`    | last ε of the auction                      | 1e-9    |
+//! | `exact.auction_start`  | first ε of the auction, × diameter²        | 0.025   |
+//! | `exact.auction_end`    | last ε of the auction, × diameter²         | 2.5e-10 |
 //! | `exact.warm_start`     | Sinkhorn settings of the warm start        | blur 0.03, one update per scale, ≤ 10 polish updates |
 
 mod auction;
@@ -91,9 +96,9 @@ pub struct ExactSettings {
     pub tolerance: f64,
     /// The entropic solve that provides potentials and candidates.
     pub warm_start: SinkhornSettings,
-    /// First ε of the auction (in cost units).
+    /// First ε of the auction, in units of the clouds' squared diameter.
     pub auction_start: f64,
-    /// Last ε of the auction, before the exact finish.
+    /// Last ε of the auction, before the exact finish, in units of the clouds' squared diameter.
     pub auction_end: f64,
 }
 
@@ -113,8 +118,10 @@ impl Default for ExactSettings {
                 coarse_period: 0,
                 ..SinkhornSettings::default()
             },
-            auction_start: 0.1,
-            auction_end: 1e-9,
+            // 0.1 and 1e-9 in cost units on clouds of squared diameter 4 (the
+            // benchmark's blobs pairs: 4.4).
+            auction_start: 0.025,
+            auction_end: 2.5e-10,
         }
     }
 }
@@ -311,7 +318,9 @@ fn sparse_prices(
     }
     phases.add("candidates", candidates_start.elapsed().as_secs_f64());
     // Price discovery by auction, then an exact shortest-augmenting-path finish.
-    let (v, finished) = phases.time("auction", || auction_potentials(&edges, g, settings));
+    let (v, finished) = phases.time("auction", || {
+        auction_potentials(&edges, g, diameter_sq, settings)
+    });
     stats.auction_budget_stops += usize::from(!finished);
     stats.phases = phases;
     Prices { edges, v, stats }
@@ -342,7 +351,9 @@ pub(crate) fn solve_sorted(
             // (Not on the first round: its prices come fresh from an auction, and
             // the rows its greedy start leaves free are each a short search.)
             let (edges, v) = lsap.into_parts();
-            let (v, finished) = phases.time("auction", || auction_potentials(&edges, v, settings));
+            let (v, finished) = phases.time("auction", || {
+                auction_potentials(&edges, v, diameter_sq, settings)
+            });
             stats.auction_budget_stops += usize::from(!finished);
             lsap = SparseAssignment::new(edges, v);
         }
@@ -400,6 +411,9 @@ pub(crate) fn solve_sorted(
 /// Column potentials from an ε-scaling auction on `edges` started at prices `−v`,
 /// and whether the auction finished.
 ///
+/// Its ε runs from `auction_start` to `auction_end` times `diameter_sq` (1 for
+/// clouds of one point repeated, whose costs are all 0).
+///
 /// If a phase runs out of bids the prices reached so far are returned: they
 /// only rose from `−v` and are ε-complementary for every row assigned at
 /// that point, and the exact finish accepts any potentials. The caller counts
@@ -407,14 +421,16 @@ pub(crate) fn solve_sorted(
 fn auction_potentials(
     edges: &[Vec<(u32, f64)>],
     v: Vec<f64>,
+    diameter_sq: f64,
     settings: &ExactSettings,
 ) -> (Vec<f64>, bool) {
+    let unit = if diameter_sq > 0.0 { diameter_sq } else { 1.0 };
     let mut q: Vec<f64> = v.iter().map(|&t| -t).collect();
     let finished = auction::run(
         edges,
         &mut q,
-        settings.auction_start,
-        settings.auction_end,
+        settings.auction_start * unit,
+        settings.auction_end * unit,
         0.2,
     );
     (q.iter().map(|&t| -t).collect(), finished)

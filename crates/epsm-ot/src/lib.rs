@@ -32,7 +32,9 @@
 //!   builds the n×n matrix. [`exact::dense`] is the O(n³) reference.
 //! - [`sinkhorn`]: entropic OT, log-domain, ε-scaling, multiscale with kernel
 //!   truncation, computed online; iterates at the final ε until the L1
-//!   marginal error is below the tolerance (1e-3 by default).
+//!   marginal error is below the tolerance (1e-3 by default), or counts the
+//!   solve in `SolveStats::unconverged_solves` when the cap of updates stops
+//!   it first; a non-finite marginal error is [`OtError::NotConverged`].
 //! - [`sliced`]: approximate sliced OT (random 1-D projections).
 //!
 //! [`synthetic::blobs_pair`] is the benchmark fixture (`epsm bench ot`).

@@ -13,6 +13,7 @@
 //! | `loss`             | the matcher's loss                                          |
 //! | `transport_cost`   | primal cost `⟨π, C⟩` (sinkhorn), the loss otherwise         |
 //! | `marginal_error`   | L1 source-marginal error (sinkhorn), else null              |
+//! | `unconverged_solves` | entropic solves whose polish stopped with the marginal error above its tolerance (sinkhorn) |
 //! | `iterations`       | Sinkhorn updates / exact re-solve rounds / projections      |
 //! | `pair_evaluations` | kernel or cost evaluations                                  |
 //! | `pair_evals_per_s` | `pair_evaluations / seconds` (sinkhorn), else null          |
@@ -85,6 +86,7 @@ struct Report {
     loss: f64,
     transport_cost: f64,
     marginal_error: Option<f64>,
+    unconverged_solves: usize,
     iterations: usize,
     pair_evaluations: u64,
     pair_evals_per_s: Option<f64>,
@@ -133,6 +135,7 @@ pub fn run(args: &OtBenchArgs) -> anyhow::Result<()> {
         loss: result.loss,
         transport_cost,
         marginal_error,
+        unconverged_solves: result.stats.unconverged_solves,
         iterations: result.stats.iterations,
         pair_evaluations: pairs,
         pair_evals_per_s: (args.solver == OtSolver::Sinkhorn).then(|| pairs as f64 / seconds),

@@ -7,6 +7,9 @@
 //! slackness); ε then shrinks by `factor` and all rows bid again from the
 //! current prices. The prices (as column potentials `v = −q`) warm-start the
 //! exact shortest-augmenting-path finish, whose searches then stay tiny.
+//! The caller gives ε in cost units, scaled with the costs (see `exact`):
+//! a bid raises a price by at least ε, so an ε below the rounding of the
+//! prices raises nothing and the phase runs out of bids.
 
 const NONE: u32 = u32::MAX;
 
@@ -48,7 +51,8 @@ pub(crate) fn run(
             if j1 == NONE {
                 return false;
             }
-            let gap = if r2.is_finite() { r2 - r1 } else { 1.0 };
+            // A lone edge: any rise keeps the row on it; the first ε scales with the costs.
+            let gap = if r2.is_finite() { r2 - r1 } else { eps_start };
             q[j1 as usize] += gap + eps;
             let previous = owner[j1 as usize];
             if previous != NONE {

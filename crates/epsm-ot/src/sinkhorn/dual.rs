@@ -27,10 +27,14 @@
 //!    `ε`, Anderson-accelerated on `f` (see `anderson`; memory
 //!    `anderson_memory`, mixing `overrelaxation`), until the L1 error of the
 //!    source marginal is at most the tolerance (the target marginal is exact
-//!    after each `g` update). Anderson removes the slow large-scale modes that
+//!    after each `g` update; a NaN error is never within it, see [`converged`]).
+//!    Anderson removes the slow large-scale modes that
 //!    made over-relaxed Sinkhorn need ~200 updates at blur 0.01; if an
 //!    extrapolated step blows the error up (×10 over the best) the history is
-//!    dropped and the loop restarts from the best iterate.
+//!    dropped and the loop restarts from the best iterate. A polish that runs
+//!    out of updates first ends on one more target update, and the caller
+//!    counts it (`SolveStats::unconverged_solves`) or, for a non-finite
+//!    error, fails (`OtError::NotConverged`).
 
 use rayon::prelude::*;
 
@@ -207,7 +211,7 @@ impl Loop<'_> {
             relax(f, &ft, omega);
             self.pairs += pairs;
             self.iterations += 1;
-            if err <= tolerance || it == settings.max_scale_iterations {
+            if converged(err, tolerance) || it == settings.max_scale_iterations {
                 break;
             }
             let (pairs, next) = g_half(&sup, f, g, period > 0 && it % period == 0);
@@ -391,7 +395,7 @@ pub(crate) fn polish(
         lp.pairs += p1 + p2;
         lp.iterations += 1;
         marginal_error = row_marginal_error(&f, &ft, eps);
-        if marginal_error <= settings.marginal_tolerance {
+        if converged(marginal_error, settings.marginal_tolerance) {
             break;
         }
         let restarted;
@@ -400,8 +404,9 @@ pub(crate) fn polish(
             support = lp.support(&f, &g, threshold);
         }
     }
-    if marginal_error > settings.marginal_tolerance {
-        // Out of iterations: f moved after the last g update; make the target marginal exact again.
+    if !converged(marginal_error, settings.marginal_tolerance) {
+        // Out of iterations (or a NaN error): f moved after the last g update; make the
+        // target marginal exact again.
         let (gt, pairs) = target_update(&support, &f, &g);
         lp.pairs += pairs;
         g = gt;
@@ -419,6 +424,13 @@ pub(crate) fn polish(
         guards: Guards::default(),
         phases,
     }
+}
+
+/// Whether a marginal `error` meets `tolerance`. NaN never does: a NaN error is
+/// "not converged" everywhere (`NaN > tolerance` is false too, so a test written
+/// as "above tolerance" would take a NaN for converged).
+pub(crate) fn converged(error: f64, tolerance: f64) -> bool {
+    error <= tolerance
 }
 
 /// Polish iterations between two refreshes of the truncated support.
@@ -445,4 +457,31 @@ fn row_marginal_error(f: &[f64], ft: &[f64], eps: f64) -> f64 {
         })
         .collect();
     parts.iter().sum::<f64>() / n
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::synthetic::uniform_cloud;
+
+    #[test]
+    fn a_nan_marginal_error_is_not_converged_and_the_target_marginal_is_restored() {
+        let n = 8;
+        let (Some(a), Some(b)) = (uniform_cloud(n, 1), uniform_cloud(n, 2)) else {
+            panic!("fixture");
+        };
+        // One cluster each: every pass streams all n² pairs.
+        let (x, y) = (Clustered::new(&a, 32), Clustered::new(&b, 32));
+        let settings = SinkhornSettings {
+            max_polish_iterations: 1,
+            ..SinkhornSettings::default()
+        };
+        let mut f = vec![0.0; n];
+        f[3] = f64::NAN;
+        let dual = polish(&x, &y, f, vec![0.0; n], &settings, 0, 0);
+        assert!(dual.marginal_error.is_nan());
+        assert!(!converged(dual.marginal_error, settings.marginal_tolerance));
+        // The round's two updates, then the final target update of the unconverged exit.
+        assert_eq!(dual.pairs, 3 * (n * n) as u64);
+    }
 }

@@ -250,14 +250,17 @@ fn sliced_identical_clouds_give_zero_loss_and_gradient() {
 fn clouds_too_spread_for_the_kernel_are_a_typed_error() {
     let mut rng = Rng::new(6);
     let near = random_cloud(&mut rng, 50, 1.0);
-    // (blur, a shift whose diameter²/ε is just inside MAX_SPREAD ≈ 4.3e37,
-    // shifts beyond it: 1e42, and the largest f32 coordinates).
-    // At blur ≥ 1 the bound is on diameter² itself: the kernel's f32 costs.
-    for (blur, inside, outside) in [
-        (crate::MIN_BLUR, 6e14, [1e17, 3e38]),
-        (0.01, 6e16, [1e19, 3e38]),
-        (1e10, 6e18, [1e20, 3e38]),
-        (1e20, 6e18, [1e20, 3e38]),
+    // The entropic solve centres each cloud first, so a translation only bounds
+    // the gradient (the exact matcher's bound: 3e38 is beyond it), while the
+    // clouds' own spread is bounded by MAX_SPREAD ≈ 4.3e37 in units of
+    // min(ε, 1): diameter²/ε ≈ 5e38 for these spreads. The old code refused
+    // translations of 1e17 and more at the smallest blur, and solved those
+    // below with an infinite marginal error.
+    for (blur, spread) in [
+        (crate::MIN_BLUR, 1e15),
+        (0.01, 1e17),
+        (1e10, 1e19),
+        (1e20, 1e19),
     ] {
         for debias in [false, true] {
             let m = SinkhornSettings {
@@ -265,19 +268,26 @@ fn clouds_too_spread_for_the_kernel_are_a_typed_error() {
                 debias,
                 ..SinkhornSettings::default()
             };
-            let far = translated(&near, [0.0, 0.0, 0.0, inside, 0.0]);
-            let r = crate::sinkhorn::solve(&near, &far, &m).unwrap_or_else(|e| panic!("{e}"));
-            let mean_x = r.gradient.iter().map(|g| f64::from(g[3])).sum::<f64>() / 50.0;
-            assert!(
-                all_finite(&r) && (mean_x / (-2.0 * f64::from(inside) / 50.0) - 1.0).abs() < 1e-3,
-                "blur {blur} debias {debias}: shift {inside:e}, mean x gradient {mean_x:e}"
-            );
-            for shift in outside {
+            for shift in [6e14, 1e20, 1e37] {
                 let far = translated(&near, [0.0, 0.0, 0.0, shift, 0.0]);
-                let r = crate::sinkhorn::solve(&near, &far, &m);
+                let r = crate::sinkhorn::solve(&near, &far, &m).unwrap_or_else(|e| panic!("{e}"));
+                let mean_x = r.gradient.iter().map(|g| f64::from(g[3])).sum::<f64>() / 50.0;
+                assert!(
+                    all_finite(&r)
+                        && (mean_x / (-2.0 * f64::from(shift) / 50.0) - 1.0).abs() < 1e-3
+                        && r.stats.unconverged_solves == 0,
+                    "blur {blur} debias {debias}: shift {shift:e}, mean x gradient {mean_x:e}"
+                );
+            }
+            let far = translated(&near, [0.0, 0.0, 0.0, 3e38, 0.0]);
+            let wide = random_cloud(&mut rng, 50, spread);
+            for (case, r) in [
+                ("shift 3e38", crate::sinkhorn::solve(&near, &far, &m)),
+                ("spread", crate::sinkhorn::solve(&near, &wide, &m)),
+            ] {
                 assert!(
                     matches!(r, Err(OtError::SpreadTooLarge { .. })),
-                    "blur {blur} debias {debias}: shift {shift:e} gave {r:?}"
+                    "blur {blur} debias {debias}: {case} gave {r:?}"
                 );
             }
         }
@@ -351,4 +361,53 @@ fn exact_and_sliced_refuse_clouds_beyond_their_f32_range() {
         .solve(&a, &b)
         .unwrap_or_else(|e| panic!("{e}"));
     assert!(all_finite(&r), "exact near 3e38: {r:?}");
+}
+
+#[test]
+fn entropic_solves_the_f32_kernel_cannot_resolve_are_an_error_or_counted() {
+    // Points and blur scale together (the same plan): what limits the kernel is
+    // diameter²/ε. Spread over 1e6 at blur 0.01 (diameter²/ε ≈ 3e16) both paths
+    // returned Ok with an infinite marginal error.
+    let mut rng = Rng::new(8);
+    let (a, b) = (
+        random_cloud(&mut rng, 100, 1e6),
+        random_cloud(&mut rng, 100, 1e6),
+    );
+    for exact_prices in [false, true] {
+        let m = SinkhornSettings {
+            exact_prices,
+            ..SinkhornSettings::default()
+        };
+        let r = crate::sinkhorn::solve(&a, &b, &m);
+        assert!(
+            matches!(
+                r,
+                Err(OtError::NotConverged { marginal_error, rounding, .. })
+                    if marginal_error.is_infinite() && rounding > 1e9
+            ),
+            "exact_prices {exact_prices}: {:?}",
+            r.map(|r| r.stats.marginal_error)
+        );
+    }
+    // Spread over 100 (score rounding 0.02 ε): a finite error (0.25) above the
+    // tolerance when the polish stops, counted.
+    let mut rng = Rng::new(8);
+    let (a, b) = (
+        random_cloud(&mut rng, 100, 100.0),
+        random_cloud(&mut rng, 100, 100.0),
+    );
+    let r = crate::sinkhorn::solve(&a, &b, &SinkhornSettings::default())
+        .unwrap_or_else(|e| panic!("{e}"));
+    let error = r.stats.marginal_error.unwrap_or(f64::NAN);
+    assert!(
+        all_finite(&r) && error.is_finite() && error > 1e-3,
+        "{error}"
+    );
+    assert_eq!(r.stats.unconverged_solves, 1);
+    // Converged solves count nothing.
+    let near = random_cloud(&mut rng, 100, 1.0);
+    let other = random_cloud(&mut rng, 100, 1.0);
+    let r = crate::sinkhorn::solve(&near, &other, &SinkhornSettings::debiased());
+    let r = r.unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(r.stats.unconverged_solves, 0);
 }
