@@ -11,6 +11,21 @@ fn epsm(args: &[&str]) -> std::process::Output {
         .expect("epsm runs")
 }
 
+/// Runs `epsm optimize` on `problem` (relative to this crate) into a fresh
+/// temporary folder named after `name`; the run's output and the folder.
+fn optimize_into(problem: &str, name: &str) -> (std::process::Output, PathBuf) {
+    let dir = std::env::temp_dir().join(format!("epsm-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let problem = Path::new(env!("CARGO_MANIFEST_DIR")).join(problem);
+    let run = epsm(&[
+        "optimize",
+        problem.to_str().expect("utf-8"),
+        "--out",
+        dir.to_str().expect("utf-8 path"),
+    ]);
+    (run, dir)
+}
+
 fn tiny() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/tiny.toml")
 }
@@ -82,21 +97,45 @@ fn optimize_writes_parseable_reports_and_resumes() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// The matcher's guard counts reach `run.csv`: at blur 3e-4 on 16² points
+/// some entropic solves stop above the marginal tolerance (iterations 0 and
+/// 2 here), and each row counts them.
+#[test]
+fn run_reports_count_unconverged_entropic_solves() {
+    let (run, dir) = optimize_into("tests/data/tiny-sinkhorn.toml", "guards");
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let csv = std::fs::read_to_string(dir.join("run.csv")).expect("run.csv");
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().expect("header").split(',').collect();
+    let column = |name: &str| {
+        header
+            .iter()
+            .position(|c| *c == name)
+            .unwrap_or_else(|| panic!("no {name} column in {header:?}"))
+    };
+    let (unconverged, stops) = (
+        column("ot_unconverged_solves"),
+        column("ot_auction_budget_stops"),
+    );
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let count = |row: &[&str], i: usize| row[i].parse::<u64>().expect("a count");
+    let total: u64 = rows.iter().map(|r| count(r, unconverged)).sum();
+    assert!(total >= 1, "no unconverged solve counted:\n{csv}");
+    assert!(rows.iter().all(|r| count(r, stops) == 0), "{csv}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// README's main command, at the problem's shipped settings and seed: the
 /// light ends within 2 % of the box size (0.04) of the truth, the target of
 /// the caustic problem (six seeds measured 0.007–0.023; with Adam's default
 /// β1 and no `spp_match` it ended at 0.02–0.14).
 #[test]
 fn the_readmes_caustic_job_reaches_its_target() {
-    let dir = std::env::temp_dir().join(format!("epsm-readme-job-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    let problem = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/problems/caustic.toml");
-    let run = epsm(&[
-        "optimize",
-        problem.to_str().expect("utf-8"),
-        "--out",
-        dir.to_str().expect("utf-8 path"),
-    ]);
+    let (run, dir) = optimize_into("../../scenes/problems/caustic.toml", "readme-job");
     let stdout = String::from_utf8_lossy(&run.stdout);
     assert!(
         run.status.success(),

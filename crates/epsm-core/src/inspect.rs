@@ -183,6 +183,7 @@ pub fn fd_step(opt: &Optimization, param: usize) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::loss::MatchGuards;
 
     #[test]
     fn arrows_scale_to_the_spacing_and_skip_still_pixels() {
@@ -210,6 +211,7 @@ mod tests {
                 Vec2::new(0.5, 1.5),
                 Vec2::new(0.0, 0.0),
             ]),
+            guards: MatchGuards::default(),
         };
         let all = matching_lines(&loss, 1, 0.5);
         assert_eq!(all.len(), 2, "pixels 1 and 2 barely move");

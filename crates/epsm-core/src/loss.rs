@@ -15,6 +15,10 @@
 //!   `g_xy` the derivative of the loss when the pixel's content moves
 //!   (needed for camera moves, which shift the whole image).
 //!
+//! An OT loss also carries its matcher's guard counts ([`MatchGuards`]):
+//! solves that fell back or stopped short but still returned a result, which
+//! the run report counts per iteration.
+//!
 //! Both losses reject a NaN or infinite pixel of either image with
 //! [`OptimizeError::NonFinitePixel`] naming the image, the pixel and the
 //! channel.
@@ -27,9 +31,10 @@
 //! | `blur` | point units | 0.01 | ≥ 1e-4 (Sinkhorn only) |
 //! | `flow` | — | `false` | `true`, `false` |
 
-use epsm_ot::{Matcher, PointCloud, SinkhornSettings};
+use epsm_ot::{Matcher, PointCloud, SinkhornSettings, SolveStats};
 use epsm_render::Image;
 use glam::{DVec2, DVec3, Vec2, Vec3};
+use serde::{Deserialize, Serialize};
 
 use crate::run::{OptResult, OptimizeError};
 
@@ -69,6 +74,60 @@ pub struct LossEval {
     pub g_xy: Vec<DVec2>,
     /// For OT: the film position (pixels) each pixel is pulled toward.
     pub matched: Option<Vec<Vec2>>,
+    /// The matcher's guard counts (all zero for L2).
+    pub guards: MatchGuards,
+}
+
+/// How often one loss evaluation's matcher fell back or stopped short but
+/// still returned a result: the guard counters of [`SolveStats`]. Each is a
+/// count of events in one solve (the entropic solver's debiased loss is
+/// three solves).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct MatchGuards {
+    /// Entropic solves whose marginal error stayed above the tolerance.
+    pub unconverged_solves: u64,
+    /// Auctions stopped by their bid budget, prices used as reached (exact).
+    pub auction_budget_stops: u64,
+    /// Warm starts replaced by the cold start (exact).
+    pub cold_starts: u64,
+    /// Coarse corrections that converged only lumped, with bridges (entropic).
+    pub bridged_corrections: u64,
+    /// Coarse corrections applied clamped (entropic).
+    pub clamped_corrections: u64,
+}
+
+impl MatchGuards {
+    /// The `run.csv` column of each count, in the order of [`Self::counts`].
+    pub const COLUMNS: [&'static str; 5] = [
+        "ot_unconverged_solves",
+        "ot_auction_budget_stops",
+        "ot_cold_starts",
+        "ot_bridged_corrections",
+        "ot_clamped_corrections",
+    ];
+
+    /// The counts of a solve's statistics.
+    pub fn of(stats: &SolveStats) -> Self {
+        let count = |n: usize| n as u64;
+        Self {
+            unconverged_solves: count(stats.unconverged_solves),
+            auction_budget_stops: count(stats.auction_budget_stops),
+            cold_starts: count(stats.cold_starts),
+            bridged_corrections: count(stats.bridged_corrections),
+            clamped_corrections: count(stats.clamped_corrections),
+        }
+    }
+
+    /// The counts, in the order of [`Self::COLUMNS`].
+    pub fn counts(&self) -> [u64; 5] {
+        [
+            self.unconverged_solves,
+            self.auction_budget_stops,
+            self.cold_starts,
+            self.bridged_corrections,
+            self.clamped_corrections,
+        ]
+    }
 }
 
 /// The tone map of the OT points, `c / (1 + c)` clamped to `[0, 1]`
@@ -158,6 +217,7 @@ pub fn evaluate(kind: LossKind, image: &Image, target: &Image, lambda: f64) -> O
         g_rgb,
         g_xy,
         matched: Some(matched),
+        guards: MatchGuards::of(&result.stats),
     })
 }
 
@@ -252,6 +312,7 @@ fn l2(image: &Image, target: &Image) -> LossEval {
         g_rgb,
         g_xy: vec![DVec2::ZERO; image.pixels.len()],
         matched: None,
+        guards: MatchGuards::default(),
     }
 }
 

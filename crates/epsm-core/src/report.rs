@@ -3,8 +3,11 @@
 //! Columns: `iteration,wall_s,loss,image_rmse,param_error`, then one column
 //! per parameter (its value, in user units, headed by its key), then
 //! `paths_traced,paths_solved,paths_skipped`, one `dropped_<reason>` column
-//! per [`DropReason`], `path_kinds` (the kinds seen, `+`-separated) and the
-//! seconds of the iteration's parts: `t_primal,t_trace,t_match,t_solve`.
+//! per [`DropReason`], the matcher's guard counts
+//! `ot_unconverged_solves,ot_auction_budget_stops,ot_cold_starts,ot_bridged_corrections,ot_clamped_corrections`
+//! ([`MatchGuards`]; zero for L2), `path_kinds` (the kinds seen,
+//! `+`-separated) and the seconds of the iteration's parts:
+//! `t_primal,t_trace,t_match,t_solve`.
 //! `param_error` is the RMS of `θ − θ_true` in the parameters' units, empty
 //! when true values are unknown.
 
@@ -14,6 +17,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use crate::drops::DropReason;
+use crate::loss::MatchGuards;
 use crate::run::{OptResult, OptimizeError};
 
 /// Seconds spent in the parts of one iteration.
@@ -48,6 +52,10 @@ pub struct Row {
     pub paths: [u64; 3],
     /// Dropped paths per [`DropReason::ALL`] entry.
     pub dropped: Vec<u64>,
+    /// The loss's matcher guard counts (absent from checkpoints written
+    /// before they were reported: zero).
+    #[serde(default)]
+    pub guards: MatchGuards,
     /// Kinds of differentiable paths seen.
     pub kinds: String,
     /// Time split.
@@ -63,6 +71,9 @@ pub fn header(keys: &[String]) -> String {
     h.push_str(",paths_traced,paths_solved,paths_skipped");
     for r in DropReason::ALL {
         let _ = write!(h, ",dropped_{}", r.name());
+    }
+    for c in MatchGuards::COLUMNS {
+        let _ = write!(h, ",{c}");
     }
     h.push_str(",path_kinds,t_primal,t_trace,t_match,t_solve");
     h
@@ -83,7 +94,12 @@ pub fn csv_line(row: &Row) -> String {
     for v in &row.theta {
         let _ = write!(s, ",{v}");
     }
-    for v in row.paths.iter().chain(&row.dropped) {
+    for v in row
+        .paths
+        .iter()
+        .chain(&row.dropped)
+        .chain(&row.guards.counts())
+    {
         let _ = write!(s, ",{v}");
     }
     let t = &row.timings;
@@ -157,6 +173,11 @@ mod tests {
             theta: vec![1.0, 2.0],
             paths: [10, 5, 2],
             dropped: vec![0; DropReason::ALL.len()],
+            guards: MatchGuards {
+                unconverged_solves: 2,
+                clamped_corrections: 7,
+                ..MatchGuards::default()
+            },
             kinds: "primary".into(),
             timings: Timings::default(),
         };
@@ -164,6 +185,14 @@ mod tests {
         let lines: Vec<&str> = text.lines().collect();
         assert!(lines[0].starts_with("iteration,wall_s,loss,image_rmse,param_error,a.translate.x"));
         assert_eq!(lines[0].split(',').count(), lines[1].split(',').count());
+        let cell = |name: &str| {
+            let column = lines[0].split(',').position(|c| c == name);
+            column.and_then(|i| lines[1].split(',').nth(i))
+        };
+        assert_eq!(cell("ot_unconverged_solves"), Some("2"));
+        assert_eq!(cell("ot_auction_budget_stops"), Some("0"));
+        assert_eq!(cell("ot_clamped_corrections"), Some("7"));
+        assert_eq!(cell("path_kinds"), Some("primary"));
         let err: f64 = lines[1]
             .split(',')
             .nth(4)
@@ -172,6 +201,15 @@ mod tests {
             .expect("number");
         assert!((err - 0.5f64.sqrt()).abs() < 1e-12);
         assert_eq!(param_error(&[1.0], &[None]), None);
+    }
+
+    #[test]
+    fn rows_of_checkpoints_without_guard_counts_read_as_zero() {
+        let json = r#"{"iteration":0,"wall_s":0.5,"loss":1.0,"image_rmse":0.1,"param_error":null,
+            "theta":[0.5],"paths":[1,1,0],"dropped":[],"kinds":"primary",
+            "timings":{"primal":0.0,"trace":0.0,"matching":0.0,"solve":0.0}}"#;
+        let row: Row = serde_json::from_str(json).expect("a row of an older checkpoint");
+        assert_eq!(row.guards, MatchGuards::default());
     }
 
     #[test]
@@ -185,6 +223,7 @@ mod tests {
             theta: Vec::new(),
             paths: [0; 3],
             dropped: Vec::new(),
+            guards: MatchGuards::default(),
             kinds: String::new(),
             timings: Timings {
                 primal,

@@ -6,7 +6,7 @@ mod common;
 use common::{End, Rng, Spec, Synth, Vertex, build, random_params};
 use epsm_core::backprop::{PassInput, PassStats, backprop};
 use epsm_core::colour::ColourModel;
-use epsm_core::loss::LossEval;
+use epsm_core::loss::{LossEval, MatchGuards};
 use epsm_core::paths::{Classified, Node};
 use epsm_core::schedule::PathUse;
 use epsm_core::{DropReason, PathKind, SolveSettings, classify};
@@ -178,6 +178,7 @@ fn backprop_alone(s: &Synth) -> (Vec<f64>, PassStats) {
         g_rgb: vec![Vec3::ZERO; n],
         g_xy: vec![DVec2::ONE; n],
         matched: None,
+        guards: MatchGuards::default(),
     };
     let colour = ColourModel::default();
     let input = PassInput {

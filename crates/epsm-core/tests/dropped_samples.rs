@@ -8,7 +8,7 @@ use std::path::Path;
 
 use epsm_core::backprop::{PassInput, PassStats, backprop};
 use epsm_core::colour::{ColourModel, PrimaryMotion};
-use epsm_core::loss::LossEval;
+use epsm_core::loss::{LossEval, MatchGuards};
 use epsm_core::schedule::PathUse;
 use epsm_core::{DropReason, ParamTable, SolveSettings, classify};
 use epsm_render::Scene;
@@ -106,6 +106,7 @@ fn gradient_pass(
         g_rgb: vec![Vec3::splat(1e-38); n],
         g_xy: vec![DVec2::ONE; n],
         matched: None,
+        guards: MatchGuards::default(),
     };
     let input = PassInput {
         scene,

@@ -324,6 +324,7 @@ impl Optimization {
                 .iter()
                 .map(|r| g.stats.dropped.get(*r))
                 .collect(),
+            guards: g.loss.guards,
             kinds: g.stats.kinds_seen(),
             timings: Timings {
                 primal,
