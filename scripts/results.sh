@@ -26,6 +26,8 @@ done
   echo "Parameter error: RMS of θ − θ_true in the parameters' units (scene units, degrees, albedo);"
   echo "image RMSE: linear RGB against the target at the scene resolution."
   echo "What each problem tests, its initial error and notes on its set-up: \`docs/suite.md\`."
+  echo "Each run uses its problem's seed (\`optimizer.seed\`, default 1); how much the result varies from seed to seed"
+  echo "(caustic, highlight, camera) is also in \`docs/suite.md\`."
   echo
   echo "Seconds per iteration (mean): primal render, gradient-pass trace, matching, solves."
   echo
