@@ -37,11 +37,10 @@ fn optimize_writes_parseable_reports_and_resumes() {
     let out = dir.to_str().expect("utf-8 path");
     let problem = tiny();
     let run = epsm(&["optimize", problem.to_str().expect("utf-8"), "--out", out]);
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{stderr}");
+    // The exact matcher: no unconverged-solve warning.
+    assert!(!stderr.contains("warning:"), "{stderr}");
     for f in [
         "run.csv",
         "report.png",
@@ -99,15 +98,23 @@ fn optimize_writes_parseable_reports_and_resumes() {
 
 /// The matcher's guard counts reach `run.csv`: at blur 3e-4 on 16² points
 /// some entropic solves stop above the marginal tolerance (iterations 0 and
-/// 2 here), and each row counts them.
+/// 2 here), and each row counts them; standard error warns once, naming the
+/// problem's blur and the ways out.
 #[test]
 fn run_reports_count_unconverged_entropic_solves() {
     let (run, dir) = optimize_into("tests/data/tiny-sinkhorn.toml", "guards");
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{stderr}");
+    assert_eq!(stderr.matches("warning:").count(), 1, "{stderr}");
+    for needle in [
+        "warning: iteration 0: 1 entropic OT solve(s) stopped above the marginal tolerance",
+        "[loss] blur = 0.0003 (",
+        "tiny-sinkhorn.toml)",
+        "kind = \"ot_exact\"",
+        "ot_unconverged_solves",
+    ] {
+        assert!(stderr.contains(needle), "no `{needle}` in {stderr}");
+    }
     let csv = std::fs::read_to_string(dir.join("run.csv")).expect("run.csv");
     let mut lines = csv.lines();
     let header: Vec<&str> = lines.next().expect("header").split(',').collect();

@@ -97,10 +97,10 @@ pub struct SolveStats {
     /// L1 marginal error of the plan (entropic solver).
     pub marginal_error: Option<f64>,
     /// Entropic solves (the plan's, and with `debias` the two self-transport
-    /// ones) whose polish ran out of `max_polish_iterations` with a finite L1
-    /// marginal error still above `marginal_tolerance`: results returned, but
-    /// not converged (entropic solver; a non-finite error is
-    /// `OtError::NotConverged` instead).
+    /// ones) whose polish ran out of `max_polish_iterations`, or stalled (see
+    /// `SinkhornSettings::stall_margin`), with a finite L1 marginal error still
+    /// above `marginal_tolerance`: results returned, but not converged
+    /// (entropic solver; a non-finite error is `OtError::NotConverged` instead).
     pub unconverged_solves: usize,
     /// Coarse corrections whose cluster scaling converged only once lumped per
     /// connected component of the support with bridges between the components,

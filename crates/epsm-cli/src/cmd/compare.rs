@@ -78,7 +78,7 @@ pub fn run(args: &CompareArgs) -> anyhow::Result<()> {
     let mut runs: Vec<(String, Summary)> = Vec::new();
     for (method, p) in problems {
         eprintln!("{name}: running {method}");
-        let s = optimize(p, &out.join(method), false, args.time_budget)?;
+        let s = optimize(p, &args.problem, &out.join(method), false, args.time_budget)?;
         runs.push((method.clone(), s));
     }
     let mut csv = String::from(

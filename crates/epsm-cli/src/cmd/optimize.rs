@@ -5,10 +5,15 @@
 //! `.exr` linear), `report.png` (image RMSE and parameter error against
 //! wall-clock seconds), `checkpoint.json` every `output.checkpoint_every`
 //! iterations and at the end (`--resume DIR` continues from it).
+//!
+//! The first iteration whose entropic OT solves stopped above their marginal
+//! tolerance (`ot_unconverged_solves` in `run.csv`) prints a warning on
+//! standard error, once per run, naming the problem's `loss.blur`.
 
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
+use epsm_core::loss::LossKind;
 use epsm_core::report::{Timings, csv, mean_timings, param_error, write_atomic};
 use epsm_core::{Method, Optimization, Problem, load_problem};
 use epsm_render::Image;
@@ -105,7 +110,13 @@ pub fn run(args: &OptimizeArgs) -> anyhow::Result<()> {
         .clone()
         .or_else(|| args.out.clone())
         .unwrap_or_else(|| problem.out_dir.clone());
-    let s = optimize(problem, &out, args.resume.is_some(), args.time_budget)?;
+    let s = optimize(
+        problem,
+        &args.problem,
+        &out,
+        args.resume.is_some(),
+        args.time_budget,
+    )?;
     println!(
         "{}: {} iterations in {:.1} s, image RMSE {:.4}, parameter error {} -> {}",
         args.problem.display(),
@@ -126,11 +137,30 @@ fn save(out: &Path, name: &str, img: &Image) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Runs (or resumes) `problem` writing into `out`, stopping after the
-/// problem's iterations or, when `budget_s` is given, once the run's
-/// wall-clock seconds reach it, whichever comes first.
+/// The warning of the first iteration with `count` unconverged entropic
+/// solves, naming the blur of `kind` (the loss of the problem file `file`).
+fn unconverged_warning(file: &Path, kind: LossKind, iteration: u32, count: u64) -> String {
+    let blur = match kind {
+        LossKind::OtSinkhorn { blur } => format!("blur = {blur}"),
+        _ => "its blur".to_owned(),
+    };
+    format!(
+        "warning: iteration {iteration}: {count} entropic OT solve(s) stopped above the \
+         marginal tolerance, so the matching and its gradient are approximate. \
+         The Sinkhorn solver cannot resolve [loss] {blur} ({}) for these images: \
+         raise it (0.01, the default, converges on the 64x64 matches measured; \
+         see docs/problem-format.md) or use kind = \"ot_exact\". run.csv counts \
+         such solves per iteration (ot_unconverged_solves); this warning is shown once.",
+        file.display()
+    )
+}
+
+/// Runs (or resumes) `problem`, loaded from `problem_file`, writing into
+/// `out`, stopping after the problem's iterations or, when `budget_s` is
+/// given, once the run's wall-clock seconds reach it, whichever comes first.
 pub fn optimize(
     problem: Problem,
+    problem_file: &Path,
     out: &Path,
     resume: bool,
     budget_s: Option<f64>,
@@ -163,8 +193,16 @@ pub fn optimize(
     bar.set_position(u64::from(opt.iteration()));
     let within_budget =
         |o: &Optimization| budget_s.is_none_or(|b| o.rows().last().is_none_or(|r| r.wall_s < b));
+    let mut warned = false;
     while !opt.is_done() && within_budget(&opt) {
         let row = opt.step()?;
+        let unconverged = row.guards.unconverged_solves;
+        if unconverged > 0 && !warned {
+            warned = true;
+            let kind = opt.problem().loss.kind;
+            let text = unconverged_warning(problem_file, kind, row.iteration, unconverged);
+            bar.suspend(|| eprintln!("{text}"));
+        }
         bar.set_message(format!("loss {:.3e}", row.loss));
         bar.inc(1);
         write_atomic(&out.join("run.csv"), csv(&keys, opt.rows()).as_bytes())?;

@@ -32,7 +32,9 @@
 //!    made over-relaxed Sinkhorn need ~200 updates at blur 0.01; if an
 //!    extrapolated step blows the error up (×10 over the best) the history is
 //!    dropped and the loop restarts from the best iterate. A polish that runs
-//!    out of updates first ends on one more target update, and the caller
+//!    out of updates first, or stalls (its smallest error falls too slowly to
+//!    reach the tolerance within the updates left, even `stall_margin` times
+//!    faster; see [`stalled`]), ends on one more target update, and the caller
 //!    counts it (`SolveStats::unconverged_solves`) or, for a non-finite
 //!    error, fails (`OtError::NotConverged`).
 
@@ -380,6 +382,8 @@ pub(crate) fn polish(
             Some(Cut { own: g, threshold }),
         )
     };
+    // The smallest marginal error after each update (NaN ignored), for the stall test.
+    let mut best: Vec<f64> = Vec::new();
     for round in 0..settings.max_polish_iterations {
         // One full update from f: g exact for the target marginal, then the source update.
         let (gt, p1) = target_update(&support, &f, &g);
@@ -396,6 +400,13 @@ pub(crate) fn polish(
         lp.iterations += 1;
         marginal_error = row_marginal_error(&f, &ft, eps);
         if converged(marginal_error, settings.marginal_tolerance) {
+            break;
+        }
+        best.push(
+            best.last()
+                .map_or(marginal_error, |&b| b.min(marginal_error)),
+        );
+        if stalled(&best, settings) {
             break;
         }
         let restarted;
@@ -435,6 +446,32 @@ pub(crate) fn converged(error: f64, tolerance: f64) -> bool {
 
 /// Polish iterations between two refreshes of the truncated support.
 const SUPPORT_REFRESH: usize = 8;
+
+/// Updates before the polish's stall test applies (the first updates of an
+/// Anderson polish are too noisy to extrapolate).
+const STALL_MIN_UPDATES: usize = 100;
+
+/// Whether a polish has stalled (see `SinkhornSettings::stall_margin`):
+/// after `best.len()` updates (`best[k]`: the smallest error after update
+/// `k + 1`), whether even `stall_margin` times the rate at which the smallest
+/// error fell over the second half of those updates (per update, in log
+/// error) falls short of reaching `marginal_tolerance` within the updates
+/// left. A polish with no finite error after [`STALL_MIN_UPDATES`] has stalled.
+fn stalled(best: &[f64], settings: &SinkhornSettings) -> bool {
+    let k = best.len();
+    if k < STALL_MIN_UPDATES || settings.stall_margin.is_infinite() {
+        return false;
+    }
+    let now = best[k - 1];
+    if !now.is_finite() {
+        return true;
+    }
+    let half = k / 2;
+    // Infinite when the second half found the first finite error: not stalled.
+    let rate = (best[half - 1] / now).ln() / (k - half) as f64;
+    let left = settings.max_polish_iterations.saturating_sub(k) as f64;
+    (now / settings.marginal_tolerance).ln() > settings.stall_margin * rate * left
+}
 
 /// Over-relaxed update `p ← (1 − ω) p + ω p̃` (Thibault et al. 2017; ω = 1 is plain Sinkhorn).
 fn relax(p: &mut [f64], target: &[f64], omega: f64) {

@@ -84,6 +84,19 @@ fn bad_input_is_a_typed_error() {
             })
         ));
     }
+    for stall_margin in [f64::NAN, 0.5] {
+        let bad = Matcher::Sinkhorn(SinkhornSettings {
+            stall_margin,
+            ..SinkhornSettings::default()
+        });
+        assert!(matches!(
+            bad.solve(&a, &a),
+            Err(OtError::InvalidSetting {
+                key: "sinkhorn.stall_margin",
+                ..
+            })
+        ));
+    }
 }
 
 #[test]
@@ -410,4 +423,56 @@ fn entropic_solves_the_f32_kernel_cannot_resolve_are_an_error_or_counted() {
     let r = crate::sinkhorn::solve(&near, &other, &SinkhornSettings::debiased());
     let r = r.unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(r.stats.unconverged_solves, 0);
+}
+
+#[test]
+fn a_stalled_polish_stops_early_and_is_still_counted_or_an_error() {
+    // The clouds of the test above: spread over 100 the polish's error stays
+    // near 0.25; over 1e6 it is infinite throughout. Both ran all 5000 polish
+    // updates before they were counted (or failed).
+    let patient = SinkhornSettings {
+        stall_margin: f64::INFINITY,
+        ..SinkhornSettings::default()
+    };
+    let mut rng = Rng::new(8);
+    let (a, b) = (
+        random_cloud(&mut rng, 100, 1e6),
+        random_cloud(&mut rng, 100, 1e6),
+    );
+    let updates = |settings| match crate::sinkhorn::solve(&a, &b, settings) {
+        Err(OtError::NotConverged {
+            marginal_error,
+            iterations,
+            ..
+        }) if marginal_error.is_infinite() => iterations,
+        r => panic!("{:?}", r.map(|r| r.stats.marginal_error)),
+    };
+    // The settings differ in the polish only: the patient one runs all its
+    // 5000 updates, so the other's polish ran `stopped − (full − 5000)`.
+    let polished = |full: usize, stopped: usize| stopped + 5000 - full;
+    let (full, stopped) = (updates(&patient), updates(&SinkhornSettings::default()));
+    assert!(
+        full >= 5000 && polished(full, stopped) <= 500,
+        "non-finite error: {stopped} updates against {full}"
+    );
+    let mut rng = Rng::new(8);
+    let (a, b) = (
+        random_cloud(&mut rng, 100, 100.0),
+        random_cloud(&mut rng, 100, 100.0),
+    );
+    let solve = |settings| {
+        let r = crate::sinkhorn::solve(&a, &b, settings).unwrap_or_else(|e| panic!("{e}"));
+        let error = r.stats.marginal_error.unwrap_or(f64::NAN);
+        assert!(
+            all_finite(&r) && error.is_finite() && error > 1e-3,
+            "{error}"
+        );
+        assert_eq!(r.stats.unconverged_solves, 1);
+        r.stats.iterations
+    };
+    let (full, stopped) = (solve(&patient), solve(&SinkhornSettings::default()));
+    assert!(
+        full >= 5000 && polished(full, stopped) <= 500,
+        "finite error: {stopped} updates against {full}"
+    );
 }
