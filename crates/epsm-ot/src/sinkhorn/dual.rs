@@ -417,7 +417,8 @@ pub(crate) fn polish(
     }
     if !converged(marginal_error, settings.marginal_tolerance) {
         // Out of iterations (or a NaN error): f moved after the last g update; make the
-        // target marginal exact again.
+        // target marginal exact again. After a stall (the loop left before its step) f
+        // has not moved, and this repeats the round's g update with the new g as the cut.
         let (gt, pairs) = target_update(&support, &f, &g);
         lp.pairs += pairs;
         g = gt;
