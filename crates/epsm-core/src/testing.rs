@@ -4,7 +4,7 @@ use std::sync::Arc;
 
 use epsm_render::lights::{Background, PointLight};
 use epsm_render::materials::{Bsdf, Diffuse, Material, Texture};
-use epsm_render::scene::{Mesh, Object, RenderSettings, SceneParts};
+use epsm_render::scene::{Mesh, Object, RenderSettings, SceneParts, Surface};
 use epsm_render::{Camera, Scene};
 use glam::{DAffine3, DQuat, DVec3, Vec3};
 
@@ -44,6 +44,7 @@ pub(crate) fn scene() -> Scene {
             world_from_object: m,
             material: 0,
             emission: None,
+            surface: Surface::Mesh,
         }],
         point_lights: vec![PointLight {
             name: "lamp".into(),

@@ -144,6 +144,23 @@ pub(crate) fn surface_point(
     }
 }
 
+/// The shading point of the exact unit sphere at octahedral coordinates
+/// `(b1, b2)` ([`crate::sphere`]), placed by `placement`: the normal is the
+/// placed sphere's (outward), geometric and shading alike.
+#[inline(always)]
+pub(crate) fn sphere_point(placement: &Placement, b1: f32, b2: f32) -> SurfacePoint {
+    let local = crate::sphere::point([f64::from(b1), f64::from(b2)]).as_vec3();
+    let n = (placement.normal_from_object * local)
+        .try_normalize()
+        .unwrap_or(local);
+    SurfacePoint {
+        p: placement.world_from_object.transform_point3(local),
+        ng: n,
+        uv: crate::sphere::uv(local),
+        frame: Frame::from_normal(n),
+    }
+}
+
 /// The texture coordinates of `triangle` of `mesh` at `(b1, b2)`: the
 /// interpolated `uvs`, or `(b1, b2)` without them.
 #[inline(always)]

@@ -28,6 +28,9 @@
 //! - **Triangles**: local coordinates `(b1, b2)` on a triangle `(p0, p1, p2)`
 //!   are barycentric: `p = (1 − b1 − b2)·p0 + b1·p1 + b2·p2`. Geometric normal
 //!   `normalize((p1 − p0) × (p2 − p0))` (counter-clockwise front face).
+//!   On an exact sphere ([`scene::Surface::Sphere`]) `(b1, b2)` are the
+//!   octahedral coordinates of the object-space point ([`sphere`]) and the
+//!   triangle index is 0.
 
 pub mod atomic_file;
 pub mod bvh;
@@ -44,6 +47,7 @@ pub mod ray;
 pub mod record;
 pub mod sampler;
 pub mod scene;
+pub mod sphere;
 pub mod tracer;
 
 pub use camera::Camera;

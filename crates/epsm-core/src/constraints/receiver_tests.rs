@@ -16,7 +16,7 @@
 use epsm_render::lights::Background;
 use epsm_render::materials::{Bsdf, Conductor, Diffuse, Lobe, Material, Texture, VertexKind};
 use epsm_render::record::{PathRecord, TrianglePoint, VertexRecord};
-use epsm_render::scene::{Mesh, Object, RenderSettings, SceneParts};
+use epsm_render::scene::{Mesh, Object, RenderSettings, SceneParts, Surface};
 use epsm_render::{Camera, Scene};
 use glam::{DAffine3, DVec3, Vec3};
 use std::sync::Arc;
@@ -45,6 +45,7 @@ fn object(c: DVec3, n: DVec3, id: u32, emission: Option<Vec3>) -> Object {
         world_from_object: DAffine3::IDENTITY,
         material: id,
         emission,
+        surface: Surface::Mesh,
     }
 }
 

@@ -11,7 +11,7 @@ use epsm_render::materials::{
 use epsm_render::record::{
     ConnectionRecord, OccluderRecord, PathRecord, TrianglePoint, VertexRecord,
 };
-use epsm_render::scene::{Mesh, Object};
+use epsm_render::scene::{Mesh, Object, Surface};
 use glam::{DAffine3, DMat3, DQuat, DVec3, Vec3};
 
 use super::synth::{End, Rng, Spec, Vertex};
@@ -100,6 +100,7 @@ impl Builder<'_> {
             world_from_object: m,
             material: id,
             emission: emission.then_some(Vec3::ONE),
+            surface: Surface::Mesh,
         });
         (
             TrianglePoint {

@@ -8,7 +8,7 @@ use epsm_render::materials::{
     Bsdf, Conductor, Dielectric, Diffuse, Lobe, Material, Texture, VertexKind,
 };
 use epsm_render::record::{TrianglePoint, VertexRecord};
-use epsm_render::scene::{Mesh, Object, RenderSettings, SceneParts};
+use epsm_render::scene::{self, Mesh, Object, RenderSettings, SceneParts};
 use epsm_render::{Camera, Scene};
 use glam::{DAffine3, DVec3, Vec3};
 
@@ -68,6 +68,7 @@ impl Manual {
             world_from_object: DAffine3::IDENTITY,
             material: id,
             emission: None,
+            surface: scene::Surface::Mesh,
         });
         id
     }

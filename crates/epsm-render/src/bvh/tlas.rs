@@ -1,6 +1,7 @@
-//! Top level: instances (an object's placement, traced either through its
-//! mesh's own bottom-level BVH or as part of the static world-space BVH) and a
-//! CWBVH over the world-space bounds of those with their own BVH.
+//! Top level: instances (an object's placement, traced through its mesh's
+//! own bottom-level BVH, as part of the static world-space BVH, or as an
+//! exact sphere) and a CWBVH over the world-space bounds of those not in the
+//! static BVH.
 //!
 //! Model: an instance's world box is the box of the eight transformed corners
 //! of its mesh's object-space box, computed in `f64` and padded outwards by a
@@ -43,6 +44,11 @@ pub(crate) enum Traced {
     World,
     /// Through bottom-level BVH `index` of its mesh, behind the top level.
     Blas(u32),
+    /// As the exact unit sphere ([`crate::sphere`]), behind the top level.
+    Sphere,
+    /// As the exact unit sphere, tested before the walks (not in the top
+    /// level).
+    Listed,
 }
 
 /// One placed object with hittable triangles.
@@ -125,7 +131,8 @@ impl Tlas {
         let placed: Vec<u32> = (0..instances.len() as u32)
             .filter(|&i| {
                 let instance = &instances[i as usize];
-                instance.placement.is_some() && instance.traced != Traced::World
+                instance.placement.is_some()
+                    && matches!(instance.traced, Traced::Blas(_) | Traced::Sphere)
             })
             .collect();
         if placed.is_empty() {

@@ -11,7 +11,7 @@ use crate::film::Image;
 use crate::materials::test_support::{
     Rng, assert_chi2, expected_counts, histogram, integrate_sphere,
 };
-use crate::scene::{Mesh, Object};
+use crate::scene::{Mesh, Object, Surface};
 
 /// The unit square `[−½, ½]²` in the object xy plane, front face `+z`.
 fn square_mesh() -> Arc<Mesh> {
@@ -35,6 +35,7 @@ fn emitter(world_from_object: DAffine3, emission: Vec3) -> Object {
         world_from_object,
         material: 0,
         emission: Some(emission),
+        surface: Surface::Mesh,
     }
 }
 

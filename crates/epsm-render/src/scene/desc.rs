@@ -216,6 +216,11 @@ pub struct ObjectDesc {
     pub mesh: Option<String>,
     /// Sphere: icosphere levels (default 3, ≤ 8); disk: segments (default 64, ≥ 3).
     pub subdivisions: Option<u32>,
+    /// Sphere: the exact unit sphere, intersected analytically, instead of
+    /// an icosphere (default false; not with `subdivisions`,
+    /// `flip_normals` or `emission`).
+    #[serde(default)]
+    pub exact: bool,
     /// Name of a material in `[materials]`.
     pub material: String,
     /// Radiance emitted from the front face, each ≥ 0; makes the object an area light.

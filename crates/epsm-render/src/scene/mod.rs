@@ -23,6 +23,7 @@ pub use mesh::Mesh;
 
 use crate::bvh::Accel;
 use crate::camera::Camera;
+use crate::error::Error;
 use crate::lights::{Background, LightTable, PointLight};
 use crate::materials::Material;
 
@@ -31,13 +32,25 @@ pub type MaterialId = u32;
 /// Index of an object in [`Scene::objects`].
 pub type ObjectId = u32;
 
-/// One object: a mesh placed in the world with a material, optionally
-/// emissive (an area light).
+/// What an object's surface is, in object space.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Surface {
+    /// The triangles of [`Object::mesh`].
+    #[default]
+    Mesh,
+    /// The exact unit sphere at the origin (outward normals), intersected
+    /// analytically ([`crate::sphere`]); the object's mesh is empty. Never an
+    /// emitter: [`Scene::new`] refuses an emissive one.
+    Sphere,
+}
+
+/// One object: a surface (a mesh or an exact sphere) placed in the world
+/// with a material, optionally emissive (an area light).
 #[derive(Clone, Debug)]
 pub struct Object {
     /// Unique name; parameters bind to it (`"<name>.<field>"`).
     pub name: String,
-    /// The mesh, object space.
+    /// The mesh, object space (empty for [`Surface::Sphere`]).
     pub mesh: Arc<Mesh>,
     /// Object → world transform (any invertible affine map).
     pub world_from_object: DAffine3,
@@ -46,6 +59,8 @@ pub struct Object {
     /// Emitted radiance from the front face (the side of the geometric normal);
     /// `None` for non-emitters.
     pub emission: Option<Vec3>,
+    /// The mesh's triangles, or the exact unit sphere.
+    pub surface: Surface,
 }
 
 /// Render settings.
@@ -108,8 +123,19 @@ pub struct Scene {
 }
 
 impl Scene {
-    /// Builds the BVHs and light tables.
+    /// Builds the BVHs and light tables. Fails with [`Error::Invalid`] on an
+    /// emissive exact sphere ([`Surface::Sphere`] is never an emitter).
     pub fn new(parts: SceneParts) -> crate::error::Result<Self> {
+        if let Some(o) = parts
+            .objects
+            .iter()
+            .find(|o| o.surface == Surface::Sphere && o.emission.is_some())
+        {
+            return Err(Error::Invalid(format!(
+                "object \"{}\": an exact sphere cannot emit (use a tessellated sphere)",
+                o.name
+            )));
+        }
         let accel = Accel::build(&parts.objects);
         let lights = LightTable::build(
             &parts.objects,
@@ -205,8 +231,18 @@ impl Scene {
     }
 
     /// Sets emission radiance of object `id` (rebuilds the light table).
+    ///
+    /// # Panics
+    /// If `id` is out of range, or names an exact sphere and `emission` is
+    /// `Some` (exact spheres never emit; [`Scene::new`] refuses them too).
     pub fn set_object_emission(&mut self, id: ObjectId, emission: Option<Vec3>) {
-        self.parts.objects[id as usize].emission = emission;
+        let object = &mut self.parts.objects[id as usize];
+        assert!(
+            object.surface == Surface::Mesh || emission.is_none(),
+            "object \"{}\": an exact sphere cannot emit",
+            object.name
+        );
+        object.emission = emission;
         self.rebuild_lights();
     }
 

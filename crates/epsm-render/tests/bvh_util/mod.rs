@@ -6,7 +6,7 @@
 
 use std::sync::Arc;
 
-use epsm_render::scene::{Mesh, Object};
+use epsm_render::scene::{Mesh, Object, Surface};
 use glam::{DAffine3, DQuat, Vec2, Vec3};
 
 pub use epsm_testkit::Rng;
@@ -81,6 +81,7 @@ pub fn object(name: String, mesh: &Arc<Mesh>, world_from_object: DAffine3) -> Ob
         world_from_object,
         material: 0,
         emission: None,
+        surface: Surface::Mesh,
     }
 }
 

@@ -6,7 +6,7 @@
 use std::sync::Arc;
 
 use epsm_render::Ray;
-use epsm_render::scene::{Mesh, Object};
+use epsm_render::scene::{Mesh, Object, Surface};
 use glam::{DAffine3, DQuat, DVec3, Vec3};
 
 /// A uniform scale by `scale`, a turn about `y` by `at.x` radians, then a move to `at`.
@@ -33,6 +33,7 @@ pub fn scene(mesh: &Arc<Mesh>) -> Vec<Object> {
             world_from_object,
             material: 0,
             emission: None,
+            surface: Surface::Mesh,
         })
         .collect()
 }

@@ -12,7 +12,7 @@ use super::named::NamedFile;
 use crate::error::Result;
 use crate::materials::Material;
 use crate::scene::desc::{ObjectDesc, ScaleDesc, ShapeKind};
-use crate::scene::{Mesh, Object, import, shapes};
+use crate::scene::{Mesh, Object, Surface, import, shapes};
 
 /// Where a mesh comes from; with the flip flag, the key of the mesh cache.
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
@@ -73,13 +73,54 @@ impl<'a> Objects<'a> {
             .map(|e| ctx.color(&format!("{field}.emission"), e, f64::INFINITY))
             .transpose()?;
         let source = self.source(field, d)?;
+        let (mesh, surface) = if d.exact {
+            self.exact_sphere(field, d)?;
+            (Arc::default(), Surface::Sphere)
+        } else {
+            (self.mesh(field, source, d.flip_normals)?, Surface::Mesh)
+        };
         Ok(Object {
             name: d.name.clone(),
-            mesh: self.mesh(field, source, d.flip_normals)?,
+            mesh,
             world_from_object: self.transform(field, d)?,
             material: material as u32,
             emission,
+            surface,
         })
+    }
+
+    /// Checks that `exact = true` names a sphere with nothing it excludes.
+    fn exact_sphere(&self, field: &str, d: &ObjectDesc) -> Result<()> {
+        let ctx = self.ctx;
+        let excluded = [
+            (
+                d.shape != Some(ShapeKind::Sphere),
+                "shape",
+                "applies to shape = \"sphere\" only",
+            ),
+            (
+                d.subdivisions.is_some(),
+                "subdivisions",
+                "an exact sphere has no subdivisions",
+            ),
+            (
+                d.flip_normals,
+                "flip_normals",
+                "not supported on an exact sphere",
+            ),
+            (
+                d.emission.is_some(),
+                "emission",
+                "an exact sphere cannot emit (use a tessellated sphere)",
+            ),
+        ];
+        match excluded.iter().find(|e| e.0) {
+            Some(&(_, key, message)) if key == "shape" => {
+                Err(ctx.err(&format!("{field}.exact"), message))
+            }
+            Some(&(_, key, message)) => Err(ctx.err(&format!("{field}.{key}"), message)),
+            None => Ok(()),
+        }
     }
 
     /// Checks `shape` / `mesh` / `subdivisions` and names the mesh source.

@@ -41,7 +41,7 @@ use crate::scene::load::Loaded;
 use crate::scene::load::Locator;
 use crate::scene::load::build::{View, checked_camera};
 use crate::scene::load::check::Ctx;
-use crate::scene::{Mesh, Object, RenderSettings, SceneParts};
+use crate::scene::{Mesh, Object, RenderSettings, SceneParts, Surface};
 
 /// Image width when the camera's extras give no resolution, pixels.
 pub const DEFAULT_WIDTH: u32 = 512;
@@ -225,6 +225,7 @@ impl Importer<'_> {
                     world_from_object,
                     material,
                     emission: self.emission.get(material as usize).copied().flatten(),
+                    surface: Surface::Mesh,
                 });
             }
         }
