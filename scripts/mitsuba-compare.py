@@ -21,7 +21,8 @@ alternate the two renderers, so compare rates within a round on a shared machine
 
 The scenes are translated from the TOML files rather than loaded from their
 Mitsuba twins in `scenes/mitsuba/`, whose spheres and disks are Mitsuba's analytic
-shapes: here both renderers intersect the same triangles. The translation covers
+shapes: here both renderers intersect the same surfaces (the same triangles, or
+for epsm's exact spheres, `exact = true`, Mitsuba's `sphere`). The translation covers
 what the shipped scenes use and refuses the rest (mesh
 files, textures, environment maps): the camera (`fov_axis = y`), `[render]`
 `max_depth` (Mitsuba counts path segments: epsm's `max_depth` + 1) and `rr_depth`,
@@ -174,6 +175,8 @@ def shape(scene, obj, materials):
     levels = obj.get("subdivisions")
     if kind in ("rectangle", "cube"):
         d = {"type": kind}
+    elif kind == "sphere" and obj.get("exact", False):
+        d = {"type": "sphere"}
     elif kind == "sphere":
         levels = 3 if levels is None else levels
         d = {"type": "ply", "filename": ply(f"sphere{levels}", *icosphere(levels)), "face_normals": False}

@@ -8,7 +8,8 @@ use bvh_util::{Rng, object, random_scene, random_transform};
 use epsm_render::Ray;
 use epsm_render::bvh::Accel;
 use epsm_render::hit::{Hit, intersect_triangle_f64, surface_point_f64};
-use epsm_render::scene::{Mesh, Object};
+use epsm_render::scene::{Mesh, Object, Surface};
+use epsm_render::sphere;
 use glam::{DAffine3, DVec3, Vec3};
 
 /// What brute force in `f64` says about a ray: the closest hit that is
@@ -44,15 +45,51 @@ fn reference_hit(object: &Object, tri: u32, o: DVec3, d: DVec3) -> Option<(f64, 
     (area2 > 0.0).then_some((h.t, margin, cos))
 }
 
+/// The `f64` roots of an exact sphere object along the world ray
+/// `o + t·d`, each as `(t, margin, |cos|)` like [`reference_hit`] (a sphere
+/// has no edges: the margin is infinite).
+fn sphere_roots(object: &Object, o: DVec3, d: DVec3) -> Vec<(f64, f64, f64)> {
+    let to_object = object.world_from_object.inverse();
+    let (lo, ld) = (
+        to_object.transform_point3(o),
+        to_object.transform_vector3(d),
+    );
+    let (a, b, c) = (ld.length_squared(), lo.dot(ld), lo.length_squared() - 1.0);
+    let disc = b * b - a * c;
+    if !(disc >= 0.0 && a > 0.0) {
+        return Vec::new();
+    }
+    let normal_from_object = to_object.matrix3.transpose();
+    [-1.0, 1.0]
+        .map(|sign| (-b + sign * disc.sqrt()) / a)
+        .into_iter()
+        .map(|t| {
+            let n = (normal_from_object * (lo + ld * t)).normalize();
+            (t, f64::INFINITY, d.normalize().dot(n).abs())
+        })
+        .collect()
+}
+
+/// Every `f64` candidate hit of `object` along `o + t·d`: `(t, margin,
+/// |cos|, triangle)`.
+fn candidates(object: &Object, o: DVec3, d: DVec3) -> Vec<(f64, f64, f64, u32)> {
+    match object.surface {
+        Surface::Sphere => sphere_roots(object, o, d)
+            .into_iter()
+            .map(|(t, m, c)| (t, m, c, 0))
+            .collect(),
+        Surface::Mesh => (0..object.mesh.len() as u32)
+            .filter_map(|tri| reference_hit(object, tri, o, d).map(|(t, m, c)| (t, m, c, tri)))
+            .collect(),
+    }
+}
+
 fn brute_force(objects: &[Object], ray: &Ray, unit: f64) -> Reference {
     let (o, d) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
     let (t_min, t_max) = (ray.t_min as f64, ray.t_max as f64);
     let mut r = Reference::default();
     for (id, object) in objects.iter().enumerate() {
-        for tri in 0..object.mesh.len() as u32 {
-            let Some((t, margin, cos)) = reference_hit(object, tri, o, d) else {
-                continue;
-            };
+        for (t, margin, cos, tri) in candidates(object, o, d) {
             let tol = t_tol(t, cos, d.length(), unit);
             if margin >= -MARGIN * unit
                 && t >= t_min - tol
@@ -147,12 +184,37 @@ fn check_against_brute_force(rng: &mut Rng, objects: &[Object], accel: &Accel, n
     certain
 }
 
-/// The reported triangle is really hit at the reported `t` and barycentrics.
+/// The reported triangle (or sphere) is really hit at the reported `t` and
+/// local coordinates.
 fn verify_hit(objects: &[Object], ray: &Ray, h: &Hit, unit: f64, i: usize) {
     let object = &objects[h.object as usize];
     let (o, d) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
-    let (t, margin, cos) =
-        reference_hit(object, h.triangle, o, d).expect("reported triangle is hittable");
+    let (t, margin, cos) = match object.surface {
+        Surface::Mesh => {
+            reference_hit(object, h.triangle, o, d).expect("reported triangle is hittable")
+        }
+        Surface::Sphere => {
+            // The root nearest the reported `t`, and the point the local
+            // coordinates name on the ray there.
+            let root = sphere_roots(object, o, d)
+                .into_iter()
+                .min_by(|a, b| {
+                    (a.0 - h.t as f64)
+                        .abs()
+                        .total_cmp(&(b.0 - h.t as f64).abs())
+                })
+                .expect("reported sphere is hit");
+            let at = object
+                .world_from_object
+                .transform_point3(sphere::point([h.b1 as f64, h.b2 as f64]));
+            let tol = t_tol(root.0, root.2, d.length(), unit) * d.length();
+            assert!(
+                at.distance(o + d * root.0) <= tol + 1e-6 * unit,
+                "ray {i}: {h:?}: local coordinates name {at}, not the hit"
+            );
+            root
+        }
+    };
     let tol = t_tol(t, cos, d.length(), unit);
     assert!(
         margin >= -MARGIN * unit,
@@ -179,6 +241,50 @@ fn random_scenes_match_brute_force() {
     eprintln!("certain hits: {certain}");
     assert!(
         certain > 1000,
+        "too few certain hits to be a test: {certain}"
+    );
+}
+
+/// An exact sphere object placed by `world_from_object`.
+fn exact_sphere(name: String, world_from_object: DAffine3) -> Object {
+    Object {
+        name,
+        mesh: Arc::new(Mesh::default()),
+        world_from_object,
+        material: 0,
+        emission: None,
+        surface: Surface::Sphere,
+    }
+}
+
+#[test]
+fn scenes_with_exact_spheres_match_brute_force_listed_instanced_and_moved() {
+    let mut rng = Rng::new(29);
+    let mut certain = 0;
+    // Three spheres are tested one by one before the walks, seven go behind
+    // the top level; both static and dynamic, some mirrored.
+    for (round, spheres) in [3, 7, 3, 7].into_iter().enumerate() {
+        let mut objects = random_scene(&mut rng);
+        let first = objects.len() as u32;
+        for k in 0..spheres {
+            let w = random_transform(&mut rng, k % 3 == 1);
+            objects.push(exact_sphere(format!("s{k}"), w));
+        }
+        let dynamic: Vec<u32> = if round < 2 {
+            vec![]
+        } else {
+            vec![0, first, first + 2]
+        };
+        let mut accel = Accel::build_with_dynamic(&objects, &dynamic);
+        certain += check_against_brute_force(&mut rng, &objects, &accel, 1500);
+        for id in [first, first + 1] {
+            objects[id as usize].world_from_object = random_transform(&mut rng, false);
+            accel.update_instance(&objects, id);
+        }
+        certain += check_against_brute_force(&mut rng, &objects, &accel, 1000);
+    }
+    assert!(
+        certain > 2000,
         "too few certain hits to be a test: {certain}"
     );
 }

@@ -10,7 +10,7 @@ use epsm_render::image_io::write_image;
 use epsm_render::lights::Background;
 use epsm_render::materials::{Bsdf, Conductor, Dielectric};
 use epsm_render::scene::import::mitsuba::from_str;
-use epsm_render::scene::{Loaded, shapes};
+use epsm_render::scene::{Loaded, Surface, shapes};
 use glam::{DAffine3, DVec3, Vec3};
 
 /// Loads a scene made of `sensor` and `body` from `dir/scene.xml`.
@@ -118,6 +118,8 @@ fn shapes_place_spheres_and_read_ply_and_obj_files() {
     .expect("write obj");
     let body = r#"
         <shape type="sphere" id="ball"><point name="center" x="1" y="2" z="3"/><float name="radius" value="0.5"/></shape>
+        <shape type="sphere" id="lamp"><emitter type="area"/></shape>
+        <shape type="sphere" id="inward"><boolean name="flip_normals" value="true"/></shape>
         <shape type="ply" id="tri"><string name="filename" value="tri.ply"/>
             <transform name="to_world"><translate x="5"/></transform><boolean name="flip_normals" value="true"/></shape>
         <shape type="obj" id="flat"><string name="filename" value="tri.obj"/><boolean name="face_normals" value="true"/>
@@ -127,21 +129,32 @@ fn shapes_place_spheres_and_read_ply_and_obj_files() {
     let expected = DAffine3::from_translation(DVec3::new(1.0, 2.0, 3.0))
         * DAffine3::from_scale(DVec3::splat(0.5));
     assert!(ball.world_from_object.abs_diff_eq(expected, 1e-15));
-    assert_eq!(ball.mesh.len(), shapes::sphere(4).len());
+    assert_eq!((ball.surface, ball.mesh.len()), (Surface::Sphere, 0));
+    // Exact spheres neither emit nor flip: those stay icospheres.
+    let [lamp, inward] = [&p.objects[1], &p.objects[2]];
     assert_eq!(
-        p.objects[1].mesh.indices,
+        (lamp.surface, lamp.emission),
+        (Surface::Mesh, Some(Vec3::ONE))
+    );
+    assert_eq!(lamp.mesh.len(), shapes::sphere(4).len());
+    assert_eq!(
+        (inward.surface, inward.mesh.len()),
+        (Surface::Mesh, shapes::sphere(4).len())
+    );
+    assert_eq!(
+        p.objects[3].mesh.indices,
         vec![[0, 2, 1]],
         "flip_normals reverses the winding"
     );
     assert_eq!(
-        p.objects[1].world_from_object.translation,
+        p.objects[3].world_from_object.translation,
         DVec3::new(5.0, 0.0, 0.0)
     );
     assert!(
-        p.objects[2].mesh.normals.is_empty(),
+        p.objects[4].mesh.normals.is_empty(),
         "face_normals drops vertex normals"
     );
-    assert_eq!(p.objects[2].emission, Some(Vec3::splat(3.0)));
+    assert_eq!(p.objects[4].emission, Some(Vec3::splat(3.0)));
 }
 
 #[test]

@@ -9,7 +9,7 @@ use epsm_render::film::Image;
 use epsm_render::image_io::write_image;
 use epsm_render::lights::Background;
 use epsm_render::materials::{Bsdf, Texture};
-use epsm_render::scene::{RenderSettings, Scene, load_scene, parts_from_str};
+use epsm_render::scene::{RenderSettings, Scene, Surface, load_scene, parts_from_str};
 use glam::{DVec3, Vec3};
 
 fn doc_path() -> PathBuf {
@@ -232,4 +232,34 @@ fn scene_descriptions_survive_a_toml_round_trip() {
     let text = toml::to_string(&desc).expect("serializes");
     let (back, _) = parse_toml::<SceneDesc>(&text, Path::new("again.toml")).expect("reparses");
     assert_eq!(back, desc);
+}
+
+/// An exact sphere loads as `Surface::Sphere` with an empty mesh; made
+/// emissive in code, [`Scene::new`] refuses it (it has no triangles to
+/// sample), naming the object.
+#[test]
+fn exact_spheres_load_and_never_emit() {
+    let text = r#"
+        [camera]
+        origin = [0, 0, 4]
+        target = [0, 0, 0]
+        resolution = [8, 8]
+        [materials.m]
+        type = "diffuse"
+        [[objects]]
+        name = "ball"
+        shape = "sphere"
+        exact = true
+        material = "m"
+        scale = 0.5
+    "#;
+    let mut parts = parts_from_str(text, Path::new("s.toml")).expect("an exact sphere loads");
+    let ball = &parts.objects[0];
+    assert_eq!(ball.surface, Surface::Sphere);
+    assert!(ball.mesh.is_empty());
+    let scene = Scene::new(parts.clone()).expect("a non-emitting sphere is a scene");
+    assert_eq!(scene.radius(), 0.5 * 3f64.sqrt());
+    parts.objects[0].emission = Some(Vec3::ONE);
+    let err = Scene::new(parts).expect_err("an emissive exact sphere");
+    assert!(err.to_string().contains("\"ball\""), "{err}");
 }

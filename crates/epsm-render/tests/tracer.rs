@@ -30,9 +30,13 @@ fn in_pool<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
         .install(f)
 }
 
+/// How the furnace's sphere is made: tessellated, and exact.
+const SPHERES: [&str; 2] = ["subdivisions = 4", "exact = true"];
+
 /// A unit-radius object at the origin inside a uniform environment of
-/// radiance 0.5, seen from z = 4.
-fn furnace(material: &str, max_depth: u32) -> Scene {
+/// radiance 0.5, seen from z = 4; `sphere` is the shape's tessellation line
+/// (one of [`SPHERES`]).
+fn furnace(material: &str, max_depth: u32, sphere: &str) -> Scene {
     scene(&format!(
         r#"
         [camera]
@@ -49,7 +53,7 @@ fn furnace(material: &str, max_depth: u32) -> Scene {
         [[objects]]
         name = "ball"
         shape = "sphere"
-        subdivisions = 4
+        {sphere}
         material = "m"
         "#
     ))
@@ -69,12 +73,15 @@ fn assert_uniform(img: &epsm_render::Image, value: f32, tol: f32) {
 /// up to one only if both count).
 #[test]
 fn furnace_diffuse_white_object_returns_the_environment() {
-    for max_depth in [1, 16] {
-        let s = furnace("type = \"diffuse\"\nalbedo = [1, 1, 1]", max_depth);
+    for (max_depth, sphere) in [1, 16].into_iter().flat_map(|d| SPHERES.map(|s| (d, s))) {
+        let s = furnace("type = \"diffuse\"\nalbedo = [1, 1, 1]", max_depth, sphere);
         let out = render(&s, &opts(&s, 64), &|_| {});
         assert_uniform(&out.image, 0.5, 0.01);
         for p in &out.image.pixels {
-            assert!((p.x - 0.5).abs() < 0.05, "max depth {max_depth}: pixel {p}");
+            assert!(
+                (p.x - 0.5).abs() < 0.05,
+                "max depth {max_depth}, {sphere}: pixel {p}"
+            );
         }
         assert_eq!(out.counters.non_finite, 0);
     }
@@ -82,11 +89,14 @@ fn furnace_diffuse_white_object_returns_the_environment() {
 
 #[test]
 fn furnace_smooth_dielectric_sphere_conserves_energy() {
-    let s = furnace("type = \"dielectric\"\nior = 1.5", 64);
-    let out = render(&s, &opts(&s, 64), &|_| {});
-    assert_uniform(&out.image, 0.5, 0.01);
-    for p in &out.image.pixels {
-        assert!((p.x - 0.5).abs() < 0.06, "pixel {p}");
+    for sphere in SPHERES {
+        let s = furnace("type = \"dielectric\"\nior = 1.5", 64, sphere);
+        let out = render(&s, &opts(&s, 64), &|_| {});
+        assert_uniform(&out.image, 0.5, 0.01);
+        for p in &out.image.pixels {
+            assert!((p.x - 0.5).abs() < 0.06, "{sphere}: pixel {p}");
+        }
+        assert_eq!(out.counters.non_finite, 0);
     }
 }
 
@@ -122,6 +132,7 @@ fn furnace_ggx_conductor_with_unit_fresnel_stays_below_one_and_matches_the_albed
         let s = furnace(
             &format!("type = \"rough_conductor\"\nalpha = {alpha}\ntint = [1, 1, 1]"),
             16,
+            SPHERES[0],
         );
         let out = render(&s, &opts(&s, 256), &|_| {});
         let mean = out.image.mean().x;
@@ -437,4 +448,50 @@ fn logging_rays_does_not_change_the_image_and_logs_every_ray_the_render_counts()
         "{blocked} of {}",
         log.shadow.len()
     );
+}
+
+/// A vertex recorded on an exact sphere names its point by octahedral
+/// coordinates (triangle 0) that place it where the path scattered, and its
+/// normals are the placed sphere's.
+#[test]
+fn records_on_exact_spheres_name_the_scattering_point() {
+    let s = scene(
+        r#"
+        [camera]
+        origin = [0, 0, 4]
+        target = [0, 0, 0]
+        fov = 30
+        resolution = [16, 16]
+        [background]
+        color = [0.5, 0.5, 0.5]
+        [materials.glass]
+        type = "dielectric"
+        [[objects]]
+        name = "ball"
+        shape = "sphere"
+        exact = true
+        material = "glass"
+        scale = [1.0, 0.7, 0.5]
+        rotate = [{ axis = [1, 1, 0], angle = 40 }]
+        translate = [0.1, 0.0, 0.2]
+        "#,
+    );
+    let o = RenderOptions {
+        spp: 2,
+        ..RenderOptions::from_scene(&s)
+    };
+    let (_, paths) = render_recorded(&s, &o, RecordLevel::Full, &|_| {});
+    let w = s.objects()[0].world_from_object;
+    let normal_from_object = w.matrix3.inverse().transpose();
+    let mut checked = 0;
+    for v in paths.iter().flat_map(|p| &p.vertices) {
+        assert_eq!((v.at.object, v.at.triangle), (0, 0));
+        let local = epsm_render::sphere::point([f64::from(v.at.b1), f64::from(v.at.b2)]);
+        let p = w.transform_point3(local);
+        assert!(p.distance(v.p.as_dvec3()) < 1e-5, "{p} vs {}", v.p);
+        let n = (normal_from_object * local).normalize();
+        assert!(n.dot(v.ns.as_dvec3()) > 1.0 - 1e-6 && n.dot(v.ng.as_dvec3()) > 1.0 - 1e-6);
+        checked += 1;
+    }
+    assert!(checked > 500, "{checked} vertices on the sphere");
 }

@@ -72,11 +72,11 @@ impl<'a> Objects<'a> {
             .emission
             .map(|e| ctx.color(&format!("{field}.emission"), e, f64::INFINITY))
             .transpose()?;
-        let source = self.source(field, d)?;
         let (mesh, surface) = if d.exact {
             self.exact_sphere(field, d)?;
             (Arc::default(), Surface::Sphere)
         } else {
+            let source = self.source(field, d)?;
             (self.mesh(field, source, d.flip_normals)?, Surface::Mesh)
         };
         Ok(Object {
@@ -91,12 +91,16 @@ impl<'a> Objects<'a> {
 
     /// Checks that `exact = true` names a sphere with nothing it excludes.
     fn exact_sphere(&self, field: &str, d: &ObjectDesc) -> Result<()> {
-        let ctx = self.ctx;
         let excluded = [
             (
                 d.shape != Some(ShapeKind::Sphere),
-                "shape",
+                "exact",
                 "applies to shape = \"sphere\" only",
+            ),
+            (
+                d.mesh.is_some(),
+                "mesh",
+                "give either shape or mesh, not both",
             ),
             (
                 d.subdivisions.is_some(),
@@ -114,11 +118,8 @@ impl<'a> Objects<'a> {
                 "an exact sphere cannot emit (use a tessellated sphere)",
             ),
         ];
-        match excluded.iter().find(|e| e.0) {
-            Some(&(_, key, message)) if key == "shape" => {
-                Err(ctx.err(&format!("{field}.exact"), message))
-            }
-            Some(&(_, key, message)) => Err(ctx.err(&format!("{field}.{key}"), message)),
+        match excluded.into_iter().find(|e| e.0) {
+            Some((_, key, message)) => Err(self.ctx.err(&format!("{field}.{key}"), message)),
             None => Ok(()),
         }
     }

@@ -44,7 +44,7 @@ use crate::materials::{Bsdf, Diffuse, Material, Texture};
 use crate::scene::load::Loaded;
 use crate::scene::load::build::ImageCache;
 use crate::scene::load::check::Ctx;
-use crate::scene::{Object, SceneParts, Surface};
+use crate::scene::{Object, SceneParts};
 
 /// Loads the Mitsuba XML scene at `path`.
 pub fn load(path: &Path) -> Result<Loaded> {
@@ -101,7 +101,7 @@ pub fn from_str(text: &str, file: &Path) -> Result<Loaded> {
             world_from_object: placed.world_from_object,
             material,
             emission: placed.emission,
-            surface: Surface::Mesh,
+            surface: placed.surface,
         });
     }
     // Top-level BSDFs no shape uses still load (and are checked).

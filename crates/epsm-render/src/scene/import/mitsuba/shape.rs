@@ -7,7 +7,7 @@
 //! | `obj`, `ply` | the file | `filename` (required, relative to the XML file), `face_normals` (false: drop vertex normals) |
 //! | `rectangle` | `[-1, 1]²` in `z = 0`, facing `+z` | — |
 //! | `cube` | `[-1, 1]³` | — |
-//! | `sphere` | icosphere of [`SPHERE_LEVELS`] levels | `center` (0), `radius` (1) |
+//! | `sphere` | the exact sphere ([`Surface::Sphere`]); with an emitter or `flip_normals`, which exact spheres do not have, an icosphere of [`SPHERE_LEVELS`] levels | `center` (0), `radius` (1) |
 //! | `disk` | unit disk in `z = 0`, [`DEFAULT_DISK_SEGMENTS`](shapes::DEFAULT_DISK_SEGMENTS) segments | — |
 //! | all | | `to_world` (identity), `flip_normals` (false) |
 //! | `<emitter type="area">` | `Object.emission` | `radiance` (1) |
@@ -30,16 +30,17 @@ use glam::{DAffine3, DVec3, Vec3};
 use super::parse::{Element, finish};
 use super::transform::transform;
 use crate::error::{Result, SceneError};
-use crate::scene::Mesh;
 use crate::scene::desc::ShapeKind;
 use crate::scene::import::load_mesh;
 use crate::scene::load::check::Ctx;
 use crate::scene::load::named::NamedFile;
 use crate::scene::load::object::flipped;
 use crate::scene::shapes;
+use crate::scene::{Mesh, Surface};
 
-/// Icosphere levels of a Mitsuba `sphere` (Mitsuba's spheres are exact;
-/// 5120 triangles keep the silhouette within 0.3 % of the radius).
+/// Icosphere levels of a Mitsuba `sphere` that emits or is flipped
+/// (Mitsuba's spheres are exact; 5120 triangles keep the silhouette within
+/// 0.3 % of the radius).
 pub const SPHERE_LEVELS: u32 = 4;
 
 /// A placed shape, before its material is attached.
@@ -50,6 +51,8 @@ pub(crate) struct Shape {
     pub world_from_object: DAffine3,
     /// Radiance of an `area` emitter.
     pub emission: Option<Vec3>,
+    /// The mesh, or the exact sphere (the mesh then empty).
+    pub surface: Surface,
 }
 
 /// Where a mesh comes from, with the flags that change it: the cache key.
@@ -120,7 +123,6 @@ impl Shapes {
             }
         };
         let flip = el.boolean(ctx, "flip_normals")?.unwrap_or(false);
-        let mesh = self.mesh(source, flip, &field("filename"), ctx)?;
         let to_world = match el.prop("to_world") {
             Some(t) => transform(t, ctx)?,
             None => DAffine3::IDENTITY,
@@ -132,10 +134,20 @@ impl Shapes {
             _ => return Err(ctx.err(&el.path, "expected at most one <emitter>")),
         };
         finish(el, ctx, skippable, warnings)?;
+        let exact = source == Source::Builtin(ShapeKind::Sphere) && !flip && emission.is_none();
+        let (mesh, surface) = if exact {
+            (Arc::default(), Surface::Sphere)
+        } else {
+            (
+                self.mesh(source, flip, &field("filename"), ctx)?,
+                Surface::Mesh,
+            )
+        };
         Ok(Shape {
             mesh,
             world_from_object: to_world * placement,
             emission,
+            surface,
         })
     }
 
