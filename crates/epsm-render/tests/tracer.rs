@@ -34,8 +34,8 @@ fn in_pool<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
 const SPHERES: [&str; 2] = ["subdivisions = 4", "exact = true"];
 
 /// A unit-radius object at the origin inside a uniform environment of
-/// radiance 0.5, seen from z = 4; `sphere` is the shape's tessellation line
-/// (one of [`SPHERES`]).
+/// radiance 0.5, seen from z = 4; `sphere` holds the object's extra keys: its
+/// tessellation (one of [`SPHERES`]), maybe a transform.
 fn furnace(material: &str, max_depth: u32, sphere: &str) -> Scene {
     scene(&format!(
         r#"
@@ -455,26 +455,11 @@ fn logging_rays_does_not_change_the_image_and_logs_every_ray_the_render_counts()
 /// normals are the placed sphere's.
 #[test]
 fn records_on_exact_spheres_name_the_scattering_point() {
-    let s = scene(
-        r#"
-        [camera]
-        origin = [0, 0, 4]
-        target = [0, 0, 0]
-        fov = 30
-        resolution = [16, 16]
-        [background]
-        color = [0.5, 0.5, 0.5]
-        [materials.glass]
-        type = "dielectric"
-        [[objects]]
-        name = "ball"
-        shape = "sphere"
-        exact = true
-        material = "glass"
-        scale = [1.0, 0.7, 0.5]
-        rotate = [{ axis = [1, 1, 0], angle = 40 }]
-        translate = [0.1, 0.0, 0.2]
-        "#,
+    let s = furnace(
+        "type = \"dielectric\"",
+        8,
+        "exact = true\nscale = [1.0, 0.7, 0.5]\nrotate = [{ axis = [1, 1, 0], angle = 40 }]\n\
+         translate = [0.1, 0.0, 0.2]",
     );
     let o = RenderOptions {
         spp: 2,
