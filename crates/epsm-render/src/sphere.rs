@@ -35,16 +35,19 @@ use glam::{DVec3, Vec2, Vec3};
 pub fn intersect(origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<f64> {
     let a = dir.length_squared();
     let h = -origin.dot(dir);
-    // `a·(1 − |l|²)` with `l` the closest point: the discriminant `h² − a·c`
-    // without the cancellation of a ray that starts far away.
-    let l = origin + dir * (h / a);
-    let disc = a * (1.0 - l.length_squared());
-    if !(disc >= 0.0 && a > 0.0) {
+    // `a·l` with `l` the closest point to the centre, so `a² − |a·l|²` is
+    // `a` times the discriminant `h² − a·c` without the cancellation of a
+    // ray that starts far away, and a miss costs no division.
+    let m = origin * a + dir * h;
+    let a_disc = a * a - m.length_squared();
+    if !(a_disc >= 0.0 && a > 0.0) {
         return None;
     }
+    let inv_a = 1.0 / a;
+    let disc = a_disc * inv_a;
     let q = h + disc.sqrt().copysign(h);
     let c = origin.length_squared() - 1.0;
-    let (r0, r1) = (c / q, q / a);
+    let (r0, r1) = (c / q, q * inv_a);
     let (near, far) = if r0 <= r1 { (r0, r1) } else { (r1, r0) };
     if (t_min..=t_max).contains(&near) {
         Some(near)

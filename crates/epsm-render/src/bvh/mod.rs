@@ -415,7 +415,7 @@ impl Accel {
                         );
                         self.blases[blas as usize].trace::<ANY>(&mut local, boxes)
                     }
-                    Traced::Sphere => placed_sphere_hit(
+                    Traced::Sphere => placed_sphere_hit::<ANY>(
                         placement,
                         world.origin,
                         world.dir,
@@ -451,7 +451,7 @@ impl Accel {
         for &index in &self.listed {
             let instance = &self.instances[index as usize];
             if let Some(placement) = &instance.placement
-                && let Some(flat) = placed_sphere_hit(placement, origin, dir, t_min, t_max)
+                && let Some(flat) = placed_sphere_hit::<ANY>(placement, origin, dir, t_min, t_max)
             {
                 t_max = flat.t;
                 best = Some((instance.object, flat));
@@ -533,9 +533,9 @@ fn hit(found: Found<'_>, best: Option<FlatHit>) -> Option<Hit> {
 /// The hit of the world-space ray `origin + t·dir` on the exact unit sphere
 /// placed by `placement`, with `t` in `[t_min, t_max]` (mapped to object
 /// space in `f32`, solved in `f64`), its local coordinates octahedral
-/// ([`sphere`]).
+/// ([`sphere`]; with `ANY`, which asks only whether there is a hit, zero).
 #[inline(always)]
-fn placed_sphere_hit(
+fn placed_sphere_hit<const ANY: bool>(
     placement: &hit::Placement,
     origin: Vec3A,
     dir: Vec3A,
@@ -546,7 +546,11 @@ fn placed_sphere_hit(
     let o = to_object.transform_point3a(origin).as_dvec3();
     let d = to_object.transform_vector3a(dir).as_dvec3();
     let t = sphere::intersect(o, d, f64::from(t_min), f64::from(t_max))?;
-    let [b1, b2] = sphere::local_coords(o + d * t);
+    let [b1, b2] = if ANY {
+        [0.0; 2]
+    } else {
+        sphere::local_coords(o + d * t)
+    };
     Some(FlatHit {
         id: 0,
         t: t as f32,
