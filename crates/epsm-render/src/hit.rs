@@ -26,11 +26,12 @@ use crate::scene::{Mesh, Object, ObjectId};
 pub struct Hit {
     /// The object hit.
     pub object: ObjectId,
-    /// Triangle index within the object's mesh.
+    /// Triangle index within the object's mesh (0 on an exact sphere).
     pub triangle: u32,
-    /// Barycentric `b1`.
+    /// Barycentric `b1` (first octahedral coordinate on an exact sphere,
+    /// [`crate::sphere`]).
     pub b1: f32,
-    /// Barycentric `b2`.
+    /// Barycentric `b2` (second octahedral coordinate on an exact sphere).
     pub b2: f32,
     /// Ray parameter of the hit (distance in units of the ray's `dir`).
     pub t: f32,
@@ -236,6 +237,10 @@ fn world_triangle64(object: &Object, triangle: u32) -> [DVec3; 3] {
 
 /// The exact surface point of `triangle` of `object` at `(b1, b2)` with its
 /// barycentric derivatives, from `object.world_from_object` in `f64`.
+///
+/// # Panics
+/// If `triangle` is not a triangle of the object's mesh (an exact sphere
+/// has none: `epsm-core` parameterises those itself).
 pub fn surface_point_f64(object: &Object, triangle: u32, b1: f64, b2: f64) -> SurfacePoint64 {
     let mesh = &object.mesh;
     let [q0, q1, q2] = world_triangle64(object, triangle);
@@ -285,6 +290,9 @@ pub fn surface_point_f64(object: &Object, triangle: u32, b1: f64, b2: f64) -> Su
 /// `triangle` of `object` (placed by `object.world_from_object`), with no
 /// range limits on `t` or the barycentrics; `None` only when the ray is
 /// parallel to the triangle's plane (or the triangle is degenerate).
+///
+/// # Panics
+/// If `triangle` is not a triangle of the object's mesh.
 pub fn intersect_triangle_f64(
     object: &Object,
     triangle: u32,

@@ -31,16 +31,18 @@ pub enum RecordLevel {
     Full,
 }
 
-/// Where a point lies on a triangle of an object.
+/// Where a point lies on a triangle of an object (on an exact sphere,
+/// [`Surface::Sphere`](crate::scene::Surface): triangle 0 and the octahedral
+/// coordinates of the object-space point, [`crate::sphere`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TrianglePoint {
     /// The object.
     pub object: ObjectId,
-    /// Triangle index within the object's mesh.
+    /// Triangle index within the object's mesh (0 on an exact sphere).
     pub triangle: u32,
-    /// Barycentric `b1`.
+    /// Barycentric `b1` (first octahedral coordinate on an exact sphere).
     pub b1: f32,
-    /// Barycentric `b2`.
+    /// Barycentric `b2` (second octahedral coordinate on an exact sphere).
     pub b2: f32,
 }
 
