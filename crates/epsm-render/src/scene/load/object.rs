@@ -115,9 +115,7 @@ impl<'a> Objects<'a> {
             ),
         ];
         match excluded.iter().find(|e| e.0) {
-            Some(&(_, key, message)) if key == "shape" => {
-                Err(ctx.err(&format!("{field}.exact"), message))
-            }
+            Some(&(_, "shape", message)) => Err(ctx.err(&format!("{field}.exact"), message)),
             Some(&(_, key, message)) => Err(ctx.err(&format!("{field}.{key}"), message)),
             None => Ok(()),
         }
