@@ -1,6 +1,6 @@
 //! One adjoint solve per path equals the forward Jacobian contracted with
 //! the loss gradient, `g·dp/dθ`, to 1e-10 relative, for every path type and
-//! random `g`.
+//! random `g`, on triangles and on exact spheres.
 
 mod common;
 
@@ -11,7 +11,18 @@ use glam::DVec2;
 
 #[test]
 fn adjoint_equals_forward_for_random_loss_gradients_on_every_path_type() {
-    let mut rng = Rng::new(99);
+    adjoint_equals_forward(false, 99);
+}
+
+#[test]
+fn adjoint_equals_forward_on_spheres() {
+    adjoint_equals_forward(true, 98);
+}
+
+/// Compares both solves on 200 paths of each type, on exact spheres with
+/// `spheres`.
+fn adjoint_equals_forward(spheres: bool, seed: u64) {
+    let mut rng = Rng::new(seed);
     let settings = SolveSettings::for_radius(1.0);
     let mut compared = [0usize; PathKind::ALL.len()];
     let mut ill = 0;
@@ -37,7 +48,11 @@ fn adjoint_equals_forward_for_random_loss_gradients_on_every_path_type() {
                 },
             })
             .collect();
-        let Some(mut s) = build(&Spec::new(kind, chain, end), &mut rng) else {
+        let spec = Spec {
+            spheres,
+            ..Spec::new(kind, chain, end)
+        };
+        let Some(mut s) = build(&spec, &mut rng) else {
             continue;
         };
         random_params(&mut s.table, &s.objects, &s.lights, &mut rng);
