@@ -20,13 +20,17 @@ fn adjoint_equals_forward_on_spheres() {
 }
 
 /// Compares both solves on 200 paths of each type, on exact spheres with
-/// `spheres`.
+/// `spheres`, within `CONFIGS` configurations.
 fn adjoint_equals_forward(spheres: bool, seed: u64) {
+    const CONFIGS: usize = 4000;
     let mut rng = Rng::new(seed);
     let settings = SolveSettings::for_radius(1.0);
     let mut compared = [0usize; PathKind::ALL.len()];
     let mut ill = 0;
+    let mut configs = 0;
     while compared.iter().any(|&c| c < 200) {
+        configs += 1;
+        assert!(configs <= CONFIGS, "too few paths compared: {compared:?}");
         let (kind, end) = match rng.below(4) {
             0 => (PathKind::Caustic, End::Emitter),
             1 => (PathKind::ChainToSurface, End::Surface),
@@ -89,6 +93,7 @@ fn adjoint_equals_forward(spheres: bool, seed: u64) {
             compared[p.kind as usize] += 1;
         }
     }
+    eprintln!("{configs} configurations: {compared:?}, {ill} ill-conditioned");
     assert!(
         ill * 100 <= compared.iter().sum::<usize>(),
         "{ill} ill-conditioned"
