@@ -371,3 +371,46 @@ fn skinny_triangles_and_axis_normals_validate_on_light_chains_and_caustics() {
         }
     }
 }
+
+/// Exact spheres (ellipsoids) at every S and diffuse vertex under the same
+/// stresses as triangles, with the same bounds: grazing incidence, chains
+/// of 8 vertices, caustics in scenes scaled by 1e-3 and 1e3.
+#[test]
+fn exact_spheres_validate_at_grazing_incidence_in_long_chains_and_at_every_scale() {
+    let grazing = run(200, 31, PathKind::ChainToSurface, 1.0, |rng| {
+        let v = if rng.below(2) == 0 {
+            Vertex::Mirror
+        } else {
+            Vertex::Glass { ior: 1.5 }
+        };
+        Spec {
+            cos: (2e-4, 1e-3),
+            spheres: true,
+            ..Spec::new(PathKind::ChainToSurface, vec![v], End::Surface)
+        }
+    });
+    assert_validated("spheres grazing", &grazing, 200, 1e-6, 200);
+    assert!(
+        grazing.checked() > 0,
+        "some grazing paths are differentiated"
+    );
+    let long = run(100, 32, PathKind::ChainToSurface, 1.0, |rng| Spec {
+        spheres: true,
+        ..Spec::new(
+            PathKind::ChainToSurface,
+            chain(rng, 7, any_vertex),
+            End::Surface,
+        )
+    });
+    assert_validated("spheres 8 vertices", &long, 100, 1e-6, 10);
+    for scale in [1e-3, 1e3] {
+        let r = run(200, 33, PathKind::Caustic, scale, |rng| {
+            let len = 1 + rng.below(3);
+            Spec {
+                spheres: true,
+                ..Spec::new(PathKind::Caustic, chain(rng, len, any_vertex), End::Emitter)
+            }
+        });
+        assert_validated(&format!("spheres scale {scale}"), &r, 200, 1e-6, 4);
+    }
+}
