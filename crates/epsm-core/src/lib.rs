@@ -41,7 +41,8 @@
 //!   `[F·(normalize(o − x) − normalize(y − x))]_xy = 0` at a shadow receiver
 //!   (it stays on the line from the light point `y` through the occluder `o`).
 //! - **Precision**: everything here is `f64`, recomputed from the meshes (or
-//!   the exact spheres' octahedral coordinates) and transforms, never from the `f32` record positions.
+//!   the exact spheres' octahedral coordinates) and transforms, never from
+//!   the `f32` record positions.
 //! - **Robustness** (DESIGN §6): a path that cannot be differentiated reliably
 //!   is dropped with a [`drops::DropReason`] and counted; nothing is clipped or
 //!   scrubbed.
