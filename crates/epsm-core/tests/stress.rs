@@ -105,19 +105,26 @@ fn any_vertex(rng: &mut Rng) -> Vertex {
     }
 }
 
+/// One mirror or glass vertex seen at grazing incidence, flat-shaded, on a
+/// triangle or (`spheres`) an exact sphere.
+fn grazing(rng: &mut Rng, spheres: bool) -> Spec {
+    let v = if rng.below(2) == 0 {
+        Vertex::Mirror
+    } else {
+        Vertex::Glass { ior: 1.5 }
+    };
+    Spec {
+        cos: (2e-4, 1e-3),
+        smooth: false,
+        spheres,
+        ..Spec::new(PathKind::ChainToSurface, vec![v], End::Surface)
+    }
+}
+
 #[test]
 fn grazing_incidence_validates_or_is_counted() {
     let r = run(200, 11, PathKind::ChainToSurface, 1.0, |rng| {
-        let v = if rng.below(2) == 0 {
-            Vertex::Mirror
-        } else {
-            Vertex::Glass { ior: 1.5 }
-        };
-        Spec {
-            cos: (2e-4, 1e-3),
-            smooth: false,
-            ..Spec::new(PathKind::ChainToSurface, vec![v], End::Surface)
-        }
+        grazing(rng, false)
     });
     assert_validated("grazing", &r, 200, 1e-6, 200);
     assert!(r.checked() > 0, "some grazing paths are differentiated");
@@ -377,21 +384,12 @@ fn skinny_triangles_and_axis_normals_validate_on_light_chains_and_caustics() {
 /// of 8 vertices, caustics in scenes scaled by 1e-3 and 1e3.
 #[test]
 fn exact_spheres_validate_at_grazing_incidence_in_long_chains_and_at_every_scale() {
-    let grazing = run(200, 31, PathKind::ChainToSurface, 1.0, |rng| {
-        let v = if rng.below(2) == 0 {
-            Vertex::Mirror
-        } else {
-            Vertex::Glass { ior: 1.5 }
-        };
-        Spec {
-            cos: (2e-4, 1e-3),
-            spheres: true,
-            ..Spec::new(PathKind::ChainToSurface, vec![v], End::Surface)
-        }
+    let grazed = run(200, 31, PathKind::ChainToSurface, 1.0, |rng| {
+        grazing(rng, true)
     });
-    assert_validated("spheres grazing", &grazing, 200, 1e-6, 200);
+    assert_validated("spheres grazing", &grazed, 200, 1e-6, 200);
     assert!(
-        grazing.checked() > 0,
+        grazed.checked() > 0,
         "some grazing paths are differentiated"
     );
     let long = run(100, 32, PathKind::ChainToSurface, 1.0, |rng| Spec {
