@@ -28,7 +28,8 @@ pub enum DropReason {
     NonFinite,
     /// The pixel vertex is at or behind the camera's eye plane.
     BehindCamera,
-    /// A vertex lies on a degenerate (zero-area) triangle.
+    /// A vertex lies on a degenerate (zero-area) triangle (or an exact
+    /// sphere with NaN coordinates or a singular placement).
     DegenerateTriangle,
     /// The path ends at the background (or another non-positional emitter):
     /// no position to differentiate.

@@ -20,9 +20,11 @@
 //! - **Pixels**: film coordinates of `epsm-render` (pixel `(0, 0)` top-left,
 //!   `y` down), through [`epsm_render::Camera`]'s pinhole projection π.
 //! - **Vertices**: a path is `x0` (the camera) `x1 … xn`. An *unknown* vertex
-//!   lies on a triangle and is addressed by tangent coordinates `u = (u1, u2)`
-//!   in that triangle's plane ([`vertex`]): at the base configuration θ₀,
-//!   `∂x/∂u` is orthonormal whatever the triangle's size or shape. A *fixed*
+//!   lies on a triangle or an exact sphere and is addressed by tangent
+//!   coordinates `u = (u1, u2)` in that triangle's plane, or in the sphere's
+//!   gnomonic chart around the vertex ([`vertex`]): at the base configuration
+//!   θ₀, `∂x/∂u` is orthonormal whatever the triangle's size or shape or the
+//!   sphere's placement. A *fixed*
 //!   vertex (the camera, the diffuse vertex ending a chain, light points,
 //!   occluder points) is no unknown: it moves rigidly with its object.
 //! - **Directions** follow `epsm-render`: at vertex `i`,
@@ -38,8 +40,9 @@
 //!   arriving from the same local direction); *collinear*
 //!   `[F·(normalize(o − x) − normalize(y − x))]_xy = 0` at a shadow receiver
 //!   (it stays on the line from the light point `y` through the occluder `o`).
-//! - **Precision**: everything here is `f64`, recomputed from the meshes and
-//!   transforms, never from the `f32` record positions.
+//! - **Precision**: everything here is `f64`, recomputed from the meshes (or
+//!   the exact spheres' octahedral coordinates) and transforms, never from
+//!   the `f32` record positions.
 //! - **Robustness** (DESIGN §6): a path that cannot be differentiated reliably
 //!   is dropped with a [`drops::DropReason`] and counted; nothing is clipped or
 //!   scrubbed.

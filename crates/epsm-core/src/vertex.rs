@@ -1,37 +1,55 @@
-//! Tangent parameterisation of a path vertex on a triangle (DESIGN §5.1).
+//! Tangent parameterisation of a path vertex on a surface: a triangle or an
+//! exact sphere (DESIGN §5.1).
 //!
-//! At the base configuration θ₀ a vertex at barycentrics `(b1, b2)` of a
-//! triangle gets world tangents `T1, T2`: the Duff basis of the triangle's
-//! world geometric normal, orthonormal in its plane. Mapped to object space
-//! (`T_obj = M₀⁻¹ T_w`, linear part) they give
-//! `x(u, θ) = M(θ)·(p_obj + u1 T1_obj + u2 T2_obj)`, so `∂x/∂u` is orthonormal
-//! at θ₀ whatever the triangle's size or shape. Barycentrics are affine in
-//! `u`; the shading normal is `normalize(N(θ)·n_obj(b(u)))`, `N` the
-//! inverse-transpose of `M`'s linear part and `n_obj` the barycentric
-//! interpolation of the mesh's vertex normals (the geometric normal for flat
-//! meshes). The plane extends beyond the triangle's edges: fine for local
-//! derivatives.
+//! Units and frames: object-space points and normals of the object's
+//! [`Surface`]; world-space results through the placement `M(θ)` (linear
+//! part `L`, normal matrix `N = L⁻ᵀ`); `u` is in world scene units at θ₀.
+//!
+//! At the base configuration θ₀ a vertex gets world tangents `T1, T2`: the
+//! Duff basis of its world normal (the triangle's geometric normal, or the
+//! placed sphere's normal `normalize(N·p)`), mapped to object space by
+//! `L₀⁻¹ = N₀ᵀ`. Its object-space chart is `q(u) = p_obj + u1 T1_obj +
+//! u2 T2_obj`:
+//! - **Triangle**: the point is `q(u)` itself (its plane extends beyond the
+//!   triangle's edges: fine for local derivatives). Barycentrics are affine
+//!   in `u`; the shading normal is `normalize(N(θ)·n_obj(b(u)))`, `n_obj`
+//!   the barycentric interpolation of the mesh's vertex normals (the
+//!   geometric normal for flat meshes).
+//! - **Sphere** (the unit sphere, normal = position): the point is the
+//!   gnomonic projection `p(u) = q(u) / |q(u)|`, `∂p/∂u_i = (T_i − p (p·T_i))
+//!   / |q|`; `T_obj ⊥ p_obj` (built so), so `|q| ≥ 1` and the chart covers
+//!   the open hemisphere around the vertex. The shading normal is `normalize(N(θ)·q)`
+//!   (the object normal `p` up to scale).
+//!
+//! Either way `x(u, θ) = M(θ)·p(u)` and `∂x/∂u = L T` is orthonormal at
+//! (u, θ) = (0, θ₀), whatever the triangle's size or shape or the sphere's
+//! placement. [`Anchor::shifted`] keeps the chart (`q` unnormalised), so the
+//! shifted anchor at `u'` is the original at `u + u'`.
 
 use epsm_render::Scene;
 use epsm_render::frame::basis_f64;
 use epsm_render::record::TrianglePoint;
-use epsm_render::scene::{Object, ObjectId};
+use epsm_render::scene::{Object, ObjectId, Surface};
+use epsm_render::sphere;
 use glam::DVec3;
 
 use crate::motion::{AffineGrad, Motion, ObjectMotion};
 
-/// A vertex anchored on a triangle, in object space.
+/// A vertex anchored on a triangle or an exact sphere, in object space.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Anchor {
     /// The object the vertex lies on.
     pub object: ObjectId,
-    /// The point at `u = 0`, object space.
+    /// The surface of the chart: a triangle's plane or the unit sphere.
+    surface: Surface,
+    /// The chart's `q` at `u = 0`, object space (on a sphere: the point up
+    /// to scale).
     p_obj: DVec3,
-    /// `∂p_obj/∂u`, object space.
+    /// `∂q/∂u`, object space.
     tangents: [DVec3; 2],
-    /// Unnormalised object-space normal at `u = 0`.
+    /// Unnormalised object-space normal at `u = 0` (on a sphere: `p_obj`).
     n_obj: DVec3,
-    /// `∂n_obj/∂u` (zero for flat meshes).
+    /// `∂n_obj/∂u` (zero for flat meshes; on a sphere: `tangents`).
     n_du: [DVec3; 2],
 }
 
@@ -58,10 +76,45 @@ fn tangential(n: DVec3, v: DVec3) -> DVec3 {
 }
 
 impl Anchor {
-    /// The anchor at barycentrics `(b1, b2)` of triangle `triangle` of
-    /// `object`, with tangents built in the placement `om`. `None` for an
-    /// index out of range or a degenerate triangle.
+    /// The anchor at local coordinates `(b1, b2)` of `object`, with tangents
+    /// built in the placement `om`: barycentrics of triangle `triangle` of a
+    /// mesh, or octahedral coordinates ([`sphere::point`]) on an exact
+    /// sphere (`triangle` ignored; coordinates clamped into `[-1, 1]²`).
+    /// `None` for an index out of range, a degenerate triangle, NaN sphere
+    /// coordinates or a singular placement.
     pub fn new(
+        object: &Object,
+        id: ObjectId,
+        triangle: u32,
+        b1: f64,
+        b2: f64,
+        om: &ObjectMotion,
+    ) -> Option<Self> {
+        match object.surface {
+            Surface::Mesh => Self::on_triangle(object, id, triangle, b1, b2, om),
+            Surface::Sphere => Self::on_sphere(id, b1, b2, om),
+        }
+    }
+
+    /// [`Anchor::new`] on the unit sphere.
+    fn on_sphere(id: ObjectId, b1: f64, b2: f64, om: &ObjectMotion) -> Option<Self> {
+        let p_obj = sphere::point([b1, b2]);
+        let n_world = (om.normal * p_obj).try_normalize()?;
+        let (t1, t2) = basis_f64(n_world);
+        let world_to_obj = om.normal.transpose();
+        let tangents = [world_to_obj * t1, world_to_obj * t2];
+        Some(Self {
+            object: id,
+            surface: Surface::Sphere,
+            p_obj,
+            tangents,
+            n_obj: p_obj,
+            n_du: tangents,
+        })
+    }
+
+    /// [`Anchor::new`] on a triangle.
+    fn on_triangle(
         object: &Object,
         id: ObjectId,
         triangle: u32,
@@ -102,6 +155,7 @@ impl Anchor {
         };
         Some(Self {
             object: id,
+            surface: Surface::Mesh,
             p_obj,
             tangents,
             n_obj,
@@ -124,7 +178,15 @@ impl Anchor {
 
     /// Position, normal and `u`-derivatives at `u` in placement `om`.
     pub fn eval(&self, om: &ObjectMotion, u: [f64; 2]) -> VertexState {
-        let p_obj = self.p_obj + self.tangents[0] * u[0] + self.tangents[1] * u[1];
+        let q = self.p_obj + self.tangents[0] * u[0] + self.tangents[1] * u[1];
+        let (p_obj, dp_du) = match self.surface {
+            Surface::Mesh => (q, self.tangents),
+            Surface::Sphere => {
+                let inv_q = 1.0 / q.length();
+                let p = q * inv_q;
+                (p, self.tangents.map(|t| tangential(p, t) * inv_q))
+            }
+        };
         let n_obj = self.n_obj + self.n_du[0] * u[0] + self.n_du[1] * u[1];
         let nw = om.normal * n_obj;
         let inv_len = 1.0 / nw.length();
@@ -132,7 +194,7 @@ impl Anchor {
         VertexState {
             x: om.linear * p_obj + om.translation,
             n,
-            dx_du: self.tangents.map(|t| om.linear * t),
+            dx_du: dp_du.map(|t| om.linear * t),
             dn_du: self.n_du.map(|d| tangential(n, om.normal * d) * inv_len),
             p_obj,
             n_obj,
@@ -148,7 +210,9 @@ impl Anchor {
         ]
     }
 
-    /// The same anchor moved to the point at `u` (tangents unchanged).
+    /// The same anchor moved to the point at `u` (tangents unchanged; on a
+    /// sphere the chart's unnormalised `q(u)`, so that the result at `u'` is
+    /// this anchor at `u + u'`).
     pub fn shifted(&self, u: [f64; 2]) -> Self {
         Self {
             p_obj: self.p_obj + self.tangents[0] * u[0] + self.tangents[1] * u[1],

@@ -1,6 +1,6 @@
 //! One adjoint solve per path equals the forward Jacobian contracted with
 //! the loss gradient, `g·dp/dθ`, to 1e-10 relative, for every path type and
-//! random `g`.
+//! random `g`, on triangles and on exact spheres.
 
 mod common;
 
@@ -11,11 +11,26 @@ use glam::DVec2;
 
 #[test]
 fn adjoint_equals_forward_for_random_loss_gradients_on_every_path_type() {
-    let mut rng = Rng::new(99);
+    adjoint_equals_forward(false, 99);
+}
+
+#[test]
+fn adjoint_equals_forward_on_spheres() {
+    adjoint_equals_forward(true, 98);
+}
+
+/// Compares both solves on 200 paths of each type, on exact spheres with
+/// `spheres`, within `CONFIGS` configurations.
+fn adjoint_equals_forward(spheres: bool, seed: u64) {
+    const CONFIGS: usize = 4000;
+    let mut rng = Rng::new(seed);
     let settings = SolveSettings::for_radius(1.0);
     let mut compared = [0usize; PathKind::ALL.len()];
     let mut ill = 0;
+    let mut configs = 0;
     while compared.iter().any(|&c| c < 200) {
+        configs += 1;
+        assert!(configs <= CONFIGS, "too few paths compared: {compared:?}");
         let (kind, end) = match rng.below(4) {
             0 => (PathKind::Caustic, End::Emitter),
             1 => (PathKind::ChainToSurface, End::Surface),
@@ -37,7 +52,11 @@ fn adjoint_equals_forward_for_random_loss_gradients_on_every_path_type() {
                 },
             })
             .collect();
-        let Some(mut s) = build(&Spec::new(kind, chain, end), &mut rng) else {
+        let spec = Spec {
+            spheres,
+            ..Spec::new(kind, chain, end)
+        };
+        let Some(mut s) = build(&spec, &mut rng) else {
             continue;
         };
         random_params(&mut s.table, &s.objects, &s.lights, &mut rng);
@@ -74,6 +93,7 @@ fn adjoint_equals_forward_for_random_loss_gradients_on_every_path_type() {
             compared[p.kind as usize] += 1;
         }
     }
+    eprintln!("{configs} configurations: {compared:?}, {ill} ill-conditioned");
     assert!(
         ill * 100 <= compared.iter().sum::<usize>(),
         "{ill} ill-conditioned"

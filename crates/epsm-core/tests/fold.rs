@@ -14,6 +14,10 @@
 //! the mirrored ray); D keeps its direction towards the mirror, so the
 //! bundle through D is parallel and the folds are at `1/d1 = 2/(R cos θ)`
 //! and `1/d1 = 2 cos θ/R`.
+//!
+//! The exact sphere of radius R tangent to z = 0 at the origin (seen from
+//! inside) has the same position, normal and curvature there, so the same
+//! folds: the second variant of each test mirrors on it.
 
 mod common;
 
@@ -23,18 +27,30 @@ use epsm_core::{DropReason, Dropped, ParamTable, PathKind, classify, solve_adjoi
 use epsm_render::Camera;
 use epsm_render::materials::Lobe;
 use epsm_render::record::PathRecord;
-use glam::{DVec2, DVec3, Vec3};
+use glam::{DAffine3, DMat3, DVec2, DVec3, Vec3};
 
 /// Checks the mirror path of `kind` with its far end at distance `d1`:
 /// the camera for `ChainToSurface`; for `Caustic`, a small emitter facing
 /// the mirror, with D seen from above. Returns the adjoint outcome and adds
-/// the check to `report`.
-fn mirror_path(kind: PathKind, d1: f64, report: &mut CheckReport) -> Result<Vec<f64>, Dropped> {
+/// the check to `report`. With `sphere` the mirror is the exact sphere.
+fn mirror_path(
+    kind: PathKind,
+    d1: f64,
+    sphere: bool,
+    report: &mut CheckReport,
+) -> Result<Vec<f64>, Dropped> {
     let r = 1.0;
     let mut m = Manual::default();
-    let tri = quad_triangle(DVec3::ZERO, DVec3::X, DVec3::Y, 1.0);
-    let normals = tri.map(|q| DVec3::Z - q / r);
-    let mirror = m.object(&[tri], Some(&[normals]), Surface::Mirror);
+    let mirror = if sphere {
+        // Object point +y at the origin (octahedral (0, 1), exact in f32).
+        let turn = DMat3::from_cols(DVec3::X, -DVec3::Z, DVec3::Y);
+        let place = DAffine3::from_mat3_translation(turn * r, DVec3::Z * r);
+        m.sphere(place, Surface::Mirror)
+    } else {
+        let tri = quad_triangle(DVec3::ZERO, DVec3::X, DVec3::Y, 1.0);
+        let normals = tri.map(|q| DVec3::Z - q / r);
+        m.object(&[tri], Some(&[normals]), Surface::Mirror)
+    };
     let d = DVec3::new(-0.5, 0.0, 0.75);
     let seen = m.object(
         &[quad_triangle(d, DVec3::X, DVec3::Y, 0.25)],
@@ -76,6 +92,9 @@ fn mirror_path(kind: PathKind, d1: f64, report: &mut CheckReport) -> Result<Vec<
     };
     let scene = m.scene(cam);
     let mut table = ParamTable::new(&scene);
+    // The sphere tilts about its point at the origin, as the triangle does
+    // (its own pivot, its centre, would leave the surface in place).
+    table.set_pivot(mirror, DVec3::ZERO);
     table.add("o1.translate.x").expect("valid key");
     table.add("o0.rotate.y").expect("valid key");
     let motion = table.motion(&table.values());
@@ -102,11 +121,18 @@ fn mirror_path(kind: PathKind, d1: f64, report: &mut CheckReport) -> Result<Vec<
 #[test]
 fn a_caustic_fold_is_dropped_and_counted_and_its_neighbourhood_validates() {
     for kind in [PathKind::ChainToSurface, PathKind::Caustic] {
-        fold_is_dropped_and_neighbourhood_validates(kind);
+        fold_is_dropped_and_neighbourhood_validates(kind, false);
     }
 }
 
-fn fold_is_dropped_and_neighbourhood_validates(kind: PathKind) {
+#[test]
+fn a_caustic_fold_on_an_exact_sphere_is_dropped_and_its_neighbourhood_validates() {
+    for kind in [PathKind::ChainToSurface, PathKind::Caustic] {
+        fold_is_dropped_and_neighbourhood_validates(kind, true);
+    }
+}
+
+fn fold_is_dropped_and_neighbourhood_validates(kind: PathKind, sphere: bool) {
     let d = DVec3::new(-0.5, 0.0, 0.75);
     // A caustic's receiver keeps its direction towards the mirror: the
     // incoming bundle is parallel (1/d2 = 0 in the fold conditions).
@@ -123,7 +149,7 @@ fn fold_is_dropped_and_neighbourhood_validates(kind: PathKind) {
     // far side the record has no nearby solution (two merge and vanish), so
     // the projection in classify stalls, where A is singular too.
     for fold in [tangential, sagittal] {
-        let outcome = mirror_path(kind, fold, &mut report);
+        let outcome = mirror_path(kind, fold, sphere, &mut report);
         assert!(
             matches!(
                 outcome,
@@ -135,11 +161,12 @@ fn fold_is_dropped_and_neighbourhood_validates(kind: PathKind) {
     assert_eq!(report.kinds[&kind].dropped.total(), 2);
     // Near the fold: finite (large) gradients; well away: validated.
     for near in [tangential * (1.0 + 1e-5), sagittal * (1.0 - 1e-5)] {
-        let g = mirror_path(kind, near, &mut report).expect("near the fold the path is kept");
+        let g =
+            mirror_path(kind, near, sphere, &mut report).expect("near the fold the path is kept");
         assert!(g.iter().all(|v| v.is_finite()), "{g:?}");
     }
     let mut away = CheckReport::default();
-    mirror_path(kind, 0.5 * tangential, &mut away).expect("away from the fold");
+    mirror_path(kind, 0.5 * tangential, sphere, &mut away).expect("away from the fold");
     let a = &away.kinds[&kind];
     assert_eq!(a.errors.len(), 1);
     assert!(a.max_rel_err() <= 1e-6, "{}", a.max_rel_err());

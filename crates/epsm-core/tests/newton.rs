@@ -1,6 +1,7 @@
 //! Newton agreement for every path type on random configurations (DESIGN §7):
-//! random triangles, file transforms, orientations, IORs, roughness samples
-//! and parameter kinds (translation, rotation, scale, light, camera).
+//! random triangles or exact spheres (non-uniformly scaled: ellipsoids),
+//! file transforms, orientations, IORs, roughness samples and parameter
+//! kinds (translation, rotation, scale, light, camera).
 
 mod common;
 
@@ -22,7 +23,7 @@ fn random_vertex(rng: &mut Rng) -> Vertex {
     }
 }
 
-fn random_spec(kind: PathKind, rng: &mut Rng) -> Spec {
+fn random_spec(kind: PathKind, spheres: bool, rng: &mut Rng) -> Spec {
     let len = 1 + rng.below(3);
     let mut chain: Vec<Vertex> = (0..len).map(|_| random_vertex(rng)).collect();
     let end = match (kind, rng.below(3)) {
@@ -38,12 +39,14 @@ fn random_spec(kind: PathKind, rng: &mut Rng) -> Spec {
     };
     let mut spec = Spec::new(kind, chain, end);
     spec.smooth = rng.below(4) != 0;
+    spec.spheres = spheres;
     spec
 }
 
 /// Builds `CONFIGS` configurations with paths of `kind` (the primary paths
-/// come from caustic records) and checks them.
-fn agreement(kind: PathKind, seed: u64) -> CheckReport {
+/// come from caustic records), on exact spheres with `spheres`, and checks
+/// them.
+fn agreement(kind: PathKind, spheres: bool, seed: u64) -> CheckReport {
     let mut rng = Rng::new(seed);
     let settings = CheckSettings::for_radius(1.0);
     let mut report = CheckReport::default();
@@ -54,7 +57,7 @@ fn agreement(kind: PathKind, seed: u64) -> CheckReport {
         } else {
             kind
         };
-        let spec = random_spec(spec_kind, &mut rng);
+        let spec = random_spec(spec_kind, spheres, &mut rng);
         let Some(mut s) = build(&spec, &mut rng) else {
             continue;
         };
@@ -64,12 +67,13 @@ fn agreement(kind: PathKind, seed: u64) -> CheckReport {
     report
 }
 
-fn assert_agreement(kind: PathKind, seed: u64) {
-    let report = agreement(kind, seed);
+fn assert_agreement(kind: PathKind, spheres: bool, seed: u64) {
+    let report = agreement(kind, spheres, seed);
     let r = &report.kinds[&kind];
     eprintln!(
-        "{}: checked {} median {:.2e} max {:.2e} adjoint {:.2e} ill {} dropped {:?}",
+        "{}{}: checked {} median {:.2e} max {:.2e} adjoint {:.2e} ill {} dropped {:?}",
         kind.name(),
+        if spheres { " (spheres)" } else { "" },
         r.checked(),
         r.median_rel_err(),
         r.max_rel_err(),
@@ -100,25 +104,50 @@ fn assert_agreement(kind: PathKind, seed: u64) {
 
 #[test]
 fn primary_paths_agree_with_newton() {
-    assert_agreement(PathKind::Primary, 1);
+    assert_agreement(PathKind::Primary, false, 1);
 }
 
 #[test]
 fn chains_to_surfaces_agree_with_newton() {
-    assert_agreement(PathKind::ChainToSurface, 2);
+    assert_agreement(PathKind::ChainToSurface, false, 2);
 }
 
 #[test]
 fn chains_to_lights_agree_with_newton() {
-    assert_agreement(PathKind::ChainToLight, 3);
+    assert_agreement(PathKind::ChainToLight, false, 3);
 }
 
 #[test]
 fn caustics_agree_with_newton() {
-    assert_agreement(PathKind::Caustic, 4);
+    assert_agreement(PathKind::Caustic, false, 4);
 }
 
 #[test]
 fn shadows_agree_with_newton() {
-    assert_agreement(PathKind::Shadow, 5);
+    assert_agreement(PathKind::Shadow, false, 5);
+}
+
+#[test]
+fn primary_paths_on_spheres_agree_with_newton() {
+    assert_agreement(PathKind::Primary, true, 11);
+}
+
+#[test]
+fn chains_to_surfaces_on_spheres_agree_with_newton() {
+    assert_agreement(PathKind::ChainToSurface, true, 12);
+}
+
+#[test]
+fn chains_to_lights_on_spheres_agree_with_newton() {
+    assert_agreement(PathKind::ChainToLight, true, 13);
+}
+
+#[test]
+fn caustics_on_spheres_agree_with_newton() {
+    assert_agreement(PathKind::Caustic, true, 14);
+}
+
+#[test]
+fn shadows_on_spheres_agree_with_newton() {
+    assert_agreement(PathKind::Shadow, true, 15);
 }

@@ -105,19 +105,26 @@ fn any_vertex(rng: &mut Rng) -> Vertex {
     }
 }
 
+/// One mirror or glass vertex seen at grazing incidence, flat-shaded, on a
+/// triangle or (`spheres`) an exact sphere.
+fn grazing(rng: &mut Rng, spheres: bool) -> Spec {
+    let v = if rng.below(2) == 0 {
+        Vertex::Mirror
+    } else {
+        Vertex::Glass { ior: 1.5 }
+    };
+    Spec {
+        cos: (2e-4, 1e-3),
+        smooth: false,
+        spheres,
+        ..Spec::new(PathKind::ChainToSurface, vec![v], End::Surface)
+    }
+}
+
 #[test]
 fn grazing_incidence_validates_or_is_counted() {
     let r = run(200, 11, PathKind::ChainToSurface, 1.0, |rng| {
-        let v = if rng.below(2) == 0 {
-            Vertex::Mirror
-        } else {
-            Vertex::Glass { ior: 1.5 }
-        };
-        Spec {
-            cos: (2e-4, 1e-3),
-            smooth: false,
-            ..Spec::new(PathKind::ChainToSurface, vec![v], End::Surface)
-        }
+        grazing(rng, false)
     });
     assert_validated("grazing", &r, 200, 1e-6, 200);
     assert!(r.checked() > 0, "some grazing paths are differentiated");
@@ -369,5 +376,39 @@ fn skinny_triangles_and_axis_normals_validate_on_light_chains_and_caustics() {
             assert_validated(&name, &r, 100, 1e-6, 4);
             assert_no_non_finite_drops(&name, &r);
         }
+    }
+}
+
+/// Exact spheres (ellipsoids) at every S and diffuse vertex under the same
+/// stresses as triangles, with the same bounds: grazing incidence, chains
+/// of 8 vertices, caustics in scenes scaled by 1e-3 and 1e3.
+#[test]
+fn exact_spheres_validate_at_grazing_incidence_in_long_chains_and_at_every_scale() {
+    let grazed = run(200, 31, PathKind::ChainToSurface, 1.0, |rng| {
+        grazing(rng, true)
+    });
+    assert_validated("spheres grazing", &grazed, 200, 1e-6, 200);
+    assert!(
+        grazed.checked() > 0,
+        "some grazing paths are differentiated"
+    );
+    let long = run(100, 32, PathKind::ChainToSurface, 1.0, |rng| Spec {
+        spheres: true,
+        ..Spec::new(
+            PathKind::ChainToSurface,
+            chain(rng, 7, any_vertex),
+            End::Surface,
+        )
+    });
+    assert_validated("spheres 8 vertices", &long, 100, 1e-6, 10);
+    for scale in [1e-3, 1e3] {
+        let r = run(200, 33, PathKind::Caustic, scale, |rng| {
+            let len = 1 + rng.below(3);
+            Spec {
+                spheres: true,
+                ..Spec::new(PathKind::Caustic, chain(rng, len, any_vertex), End::Emitter)
+            }
+        });
+        assert_validated(&format!("spheres scale {scale}"), &r, 200, 1e-6, 4);
     }
 }

@@ -1,24 +1,36 @@
 //! Newton agreement on paths traced by the renderer in the shipped scenes
 //! (translations and rotations about x and y of every object, point-light and camera
-//! moves), per path type.
+//! moves), per path type; and in one with an exact (ellipsoidal) glass sphere.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use epsm_core::check::{CheckSettings, check_paths};
+use epsm_core::paths::Node;
 use epsm_core::{ParamTable, PathKind, classify};
+use epsm_render::Scene;
 use epsm_render::record::RecordLevel;
+use epsm_render::scene::Surface;
 use epsm_render::scene::load::load_scene;
 use epsm_render::tracer::{PixelSample, RenderOptions, trace_samples};
 use glam::UVec2;
 
 const PER_TYPE: usize = 80;
 
-fn check_scene(name: &str, expected: &[PathKind]) {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+fn shipped(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../../scenes")
-        .join(name);
-    let scene = load_scene(&path).expect("shipped scene loads");
-    let mut table = ParamTable::new(&scene);
+        .join(name)
+}
+
+fn check_scene(name: &str, expected: &[PathKind]) {
+    let scene = load_scene(&shipped(name)).expect("shipped scene loads");
+    check_loaded(name, &scene, expected);
+}
+
+/// Checks up to `PER_TYPE` paths of each type traced in `scene`, that
+/// every `expected` type is there and agrees; returns the paths checked.
+fn check_loaded(name: &str, scene: &Scene, expected: &[PathKind]) -> Vec<epsm_core::DiffPath> {
+    let mut table = ParamTable::new(scene);
     table.add_default_geometry().expect("default parameters");
     for o in scene.objects() {
         for axis in ["x", "y"] {
@@ -28,7 +40,7 @@ fn check_scene(name: &str, expected: &[PathKind]) {
         }
     }
     table.add("camera.yaw").expect("camera yaw");
-    let opts = RenderOptions::from_scene(&scene);
+    let opts = RenderOptions::from_scene(scene);
     let (w, h) = (scene.camera().width, scene.camera().height);
     let samples: Vec<PixelSample> = (0..3000u32)
         .map(|i| {
@@ -43,8 +55,8 @@ fn check_scene(name: &str, expected: &[PathKind]) {
     let settings = CheckSettings::for_radius(scene.radius());
     let mut paths = Vec::new();
     let mut count = [0usize; PathKind::ALL.len()];
-    for record in trace_samples(&scene, &opts, &samples, RecordLevel::Full) {
-        for p in classify(&record, &scene, &motion, &settings.solve).paths {
+    for record in trace_samples(scene, &opts, &samples, RecordLevel::Full) {
+        for p in classify(&record, scene, &motion, &settings.solve).paths {
             if count[p.kind as usize] < PER_TYPE {
                 count[p.kind as usize] += 1;
                 paths.push(p);
@@ -82,6 +94,7 @@ fn check_scene(name: &str, expected: &[PathKind]) {
             kind.name()
         );
     }
+    paths
 }
 
 #[test]
@@ -116,4 +129,53 @@ fn traced_mirror_and_glass_paths_agree_with_newton() {
 #[test]
 fn traced_shadow_paths_agree_with_newton() {
     check_scene("shadows.toml", &[PathKind::Primary, PathKind::Shadow]);
+}
+
+/// The caustic box with its glass sphere exact, scaled per axis and turned
+/// (an ellipsoid): the renderer's sphere records (octahedral coordinates)
+/// anchor and differentiate like triangles.
+#[test]
+fn traced_paths_through_an_exact_glass_ellipsoid_agree_with_newton() {
+    let shipped_toml = std::fs::read_to_string(shipped("caustic-box.toml")).expect("readable");
+    let tessellated = "shape = \"sphere\"\nsubdivisions = 4\nmaterial = \"glass\"\nscale = 0.3\n";
+    assert!(
+        shipped_toml.contains(tessellated),
+        "caustic-box.toml changed"
+    );
+    let toml = shipped_toml.replace(
+        tessellated,
+        "shape = \"sphere\"\nexact = true\nmaterial = \"glass\"\n\
+         scale = [0.3, 0.24, 0.36]\nrotate = [{ axis = [1, 1, 0], angle = 35 }]\n",
+    );
+    let dir = tempfile::tempdir().expect("temporary directory");
+    let path = dir.path().join("exact-box.toml");
+    std::fs::write(&path, toml).expect("writable");
+    let scene = load_scene(&path).expect("the exact scene loads");
+    let sphere = scene
+        .objects()
+        .iter()
+        .position(|o| o.surface == Surface::Sphere)
+        .expect("an exact sphere") as u32;
+    let paths = check_loaded(
+        "exact-box",
+        &scene,
+        &[
+            PathKind::Primary,
+            PathKind::ChainToSurface,
+            PathKind::Shadow,
+        ],
+    );
+    let on_sphere = paths
+        .iter()
+        .filter(|p| {
+            p.nodes
+                .iter()
+                .any(|n| matches!(n, Node::Surface { anchor, .. } if anchor.object == sphere))
+        })
+        .count();
+    eprintln!(
+        "exact-box: {on_sphere} of {} paths touch the sphere",
+        paths.len()
+    );
+    assert!(on_sphere >= 80, "{on_sphere} paths on the sphere");
 }

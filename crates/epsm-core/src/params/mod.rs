@@ -23,7 +23,8 @@
 //! An object's driven transform is
 //! `M(θ) = Tr(t) · P · R_z R_y R_x · S(s) · P⁻¹ · M_file` with `P` the
 //! translation to the pivot (default: the centre of the object's world bounds
-//! in the file placement; see [`ParamTable::set_pivot`]).
+//! in the file placement; for an exact sphere, whose mesh is empty, the
+//! placement's translation: its centre; see [`ParamTable::set_pivot`]).
 //!
 //! ```toml
 //! [[parameters]]

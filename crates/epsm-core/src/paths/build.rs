@@ -1,5 +1,5 @@
 //! Building one differentiable path from a record: its nodes (anchored in
-//! `f64` on the meshes, never on the `f32` record positions), the
+//! `f64` on the meshes and exact spheres, never on the `f32` record positions), the
 //! parameters it touches, and one constraint per unknown vertex with the
 //! constants (`m`, `c`) measured at the base configuration so that
 //! `C(0, θ₀) = 0` holds for them exactly.

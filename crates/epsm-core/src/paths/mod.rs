@@ -81,7 +81,8 @@ impl PathKind {
 pub enum Node {
     /// The camera's eye `x0`.
     Camera,
-    /// A point on a triangle; `unknown` is its column block when it is solved for.
+    /// A point on a triangle or an exact sphere; `unknown` is its column
+    /// block when it is solved for.
     Surface {
         /// Where it lies.
         anchor: Anchor,

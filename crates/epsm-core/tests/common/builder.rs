@@ -1,5 +1,6 @@
-//! The configuration builder: one-triangle objects with random file
-//! transforms, and path vertices placed by the exact scattering laws.
+//! The configuration builder: one-triangle objects or exact spheres with
+//! random file transforms, and path vertices placed by the exact scattering
+//! laws.
 
 use std::sync::Arc;
 
@@ -12,6 +13,7 @@ use epsm_render::record::{
     ConnectionRecord, OccluderRecord, PathRecord, TrianglePoint, VertexRecord,
 };
 use epsm_render::scene::{Mesh, Object, Surface};
+use epsm_render::sphere::local_coords;
 use glam::{DAffine3, DMat3, DQuat, DVec3, Vec3};
 
 use super::synth::{End, Rng, Spec, Vertex};
@@ -40,9 +42,65 @@ pub fn diffuse() -> Material {
 }
 
 impl Builder<'_> {
+    /// An object through `p` with geometric normal `ng`: an exact sphere with
+    /// [`Spec::spheres`] unless it emits, else one triangle. Returns where
+    /// `p` lies and its shading normal.
+    pub fn surface(
+        &mut self,
+        p: DVec3,
+        ng: DVec3,
+        mat: Material,
+        emission: bool,
+    ) -> (TrianglePoint, DVec3) {
+        if self.spec.spheres && !emission {
+            self.sphere(p, ng, mat)
+        } else {
+            self.triangle(p, ng, mat, emission)
+        }
+    }
+
+    /// An exact sphere through `p` with outward normal `ng`, placed by a
+    /// random rotation and per-axis scale `L = R·S` (an ellipsoid): the
+    /// object point is `q = normalize(Lᵀ ng)` (where the world normal
+    /// `normalize(L⁻ᵀ q)` is `ng`), the translation `p − L q`. The shading
+    /// normal is `ng`.
+    fn sphere(&mut self, p: DVec3, ng: DVec3, mut mat: Material) -> (TrianglePoint, DVec3) {
+        let s = self.spec.scale;
+        let rot = DQuat::from_axis_angle(self.rng.unit(), self.rng.range(0.0, 3.0));
+        let scale = DVec3::new(
+            self.rng.range(0.5, 2.0),
+            self.rng.range(0.5, 2.0),
+            self.rng.range(0.5, 2.0),
+        ) * s;
+        let linear = DMat3::from_quat(rot) * DMat3::from_diagonal(scale);
+        let q = (linear.transpose() * ng).normalize();
+        let m = DAffine3::from_mat3_translation(linear, p - linear * q);
+        let [b1, b2] = local_coords(q);
+        let id = self.objects.len() as u32;
+        mat.name = format!("m{id}");
+        self.materials.push(mat);
+        self.objects.push(Object {
+            name: format!("o{id}"),
+            mesh: Arc::new(Mesh::default()),
+            world_from_object: m,
+            material: id,
+            emission: None,
+            surface: Surface::Sphere,
+        });
+        (
+            TrianglePoint {
+                object: id,
+                triangle: 0,
+                b1: b1 as f32,
+                b2: b2 as f32,
+            },
+            ng,
+        )
+    }
+
     /// A one-triangle object through `p` with geometric normal `ng`; returns
     /// where `p` lies and its shading normal.
-    pub fn triangle(
+    fn triangle(
         &mut self,
         p: DVec3,
         ng: DVec3,
@@ -169,7 +227,7 @@ impl Builder<'_> {
                 VertexKind::Glossy,
             ),
         };
-        let (at, ns) = self.triangle(x, ng, material(bsdf), false);
+        let (at, ns) = self.surface(x, ng, material(bsdf), false);
         let ci = wi.dot(ns);
         if ci.abs() < 1e-6 {
             return None;
@@ -240,7 +298,7 @@ impl Builder<'_> {
             }
             _ => {
                 let ng = self.facing(-w, (0.3, 1.0));
-                let (at, _) = self.triangle(y, ng, diffuse(), true);
+                let (at, _) = self.surface(y, ng, diffuse(), true);
                 (
                     LightPoint::Area {
                         object: at.object,
@@ -283,7 +341,7 @@ impl Builder<'_> {
         }
         x += w * s * self.rng.range(0.6, 1.8);
         let ng = self.facing(-w, (0.3, 1.0));
-        let (at, ns) = self.triangle(x, ng, diffuse(), self.spec.end == End::Emitter);
+        let (at, ns) = self.surface(x, ng, diffuse(), self.spec.end == End::Emitter);
         self.push_vertex(at, x, [ng, ns], VertexKind::Diffuse, None, 1.0);
         Some(())
     }

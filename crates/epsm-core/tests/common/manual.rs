@@ -1,5 +1,6 @@
 //! Hand-built scenes for the closed-form and fold tests: objects made of
-//! world-space triangles (identity transforms) and records placed on them.
+//! world-space triangles (identity transforms) or placed exact spheres, and
+//! records placed on them.
 
 use std::sync::Arc;
 
@@ -9,6 +10,7 @@ use epsm_render::materials::{
 };
 use epsm_render::record::{TrianglePoint, VertexRecord};
 use epsm_render::scene::{self, Mesh, Object, RenderSettings, SceneParts};
+use epsm_render::sphere::local_coords;
 use epsm_render::{Camera, Scene};
 use glam::{DAffine3, DVec3, Vec3};
 
@@ -37,19 +39,7 @@ impl Manual {
         normals: Option<&[[DVec3; 3]]>,
         surface: Surface,
     ) -> u32 {
-        let id = self.objects.len() as u32;
-        let bsdf = match surface {
-            Surface::Diffuse => Bsdf::Diffuse(Diffuse {
-                albedo: Texture::Constant(Vec3::splat(0.5)),
-            }),
-            Surface::Mirror => Bsdf::Conductor(Conductor { tint: Vec3::ONE }),
-            Surface::Glass(ior) => Bsdf::Dielectric(Dielectric { ior }),
-        };
-        self.materials.push(Material {
-            name: format!("m{id}"),
-            bsdf,
-            two_sided: true,
-        });
+        let id = self.material(surface);
         let positions = triangles.iter().flatten().map(|p| p.as_vec3()).collect();
         let normals = normals.map_or(Vec::new(), |n| {
             n.iter().flatten().map(|v| v.as_vec3()).collect()
@@ -73,12 +63,52 @@ impl Manual {
         id
     }
 
-    /// Where world point `p` (in the plane of triangle `tri`) lies.
+    /// Adds an exact sphere placed by `world_from_object`; returns its id.
+    pub fn sphere(&mut self, world_from_object: DAffine3, surface: Surface) -> u32 {
+        let id = self.material(surface);
+        self.objects.push(Object {
+            name: format!("o{id}"),
+            mesh: Arc::new(Mesh::default()),
+            world_from_object,
+            material: id,
+            emission: None,
+            surface: scene::Surface::Sphere,
+        });
+        id
+    }
+
+    /// Adds the material of the next object; returns the object's id.
+    fn material(&mut self, surface: Surface) -> u32 {
+        let id = self.objects.len() as u32;
+        let bsdf = match surface {
+            Surface::Diffuse => Bsdf::Diffuse(Diffuse {
+                albedo: Texture::Constant(Vec3::splat(0.5)),
+            }),
+            Surface::Mirror => Bsdf::Conductor(Conductor { tint: Vec3::ONE }),
+            Surface::Glass(ior) => Bsdf::Dielectric(Dielectric { ior }),
+        };
+        self.materials.push(Material {
+            name: format!("m{id}"),
+            bsdf,
+            two_sided: true,
+        });
+        id
+    }
+
+    /// Where world point `p` (in the plane of triangle `tri`, or on the
+    /// sphere) lies.
     pub fn at(&self, object: u32, tri: u32, p: DVec3) -> TrianglePoint {
-        let [a, b, c] = self.objects[object as usize]
-            .mesh
-            .triangle(tri)
-            .map(|v| v.as_dvec3());
+        let o = &self.objects[object as usize];
+        if o.surface == scene::Surface::Sphere {
+            let [b1, b2] = local_coords(o.world_from_object.inverse().transform_point3(p));
+            return TrianglePoint {
+                object,
+                triangle: 0,
+                b1: b1 as f32,
+                b2: b2 as f32,
+            };
+        }
+        let [a, b, c] = o.mesh.triangle(tri).map(|v| v.as_dvec3());
         let (e1, e2, d) = (b - a, c - a, p - a);
         let (g11, g12, g22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
         let det = g11 * g22 - g12 * g12;

@@ -43,6 +43,17 @@ pub fn check_kind(
     n
 }
 
+/// The geometric parameter fields of an object.
+pub const OBJECT_FIELDS: [&str; 7] = [
+    "translate.x",
+    "translate.y",
+    "translate.z",
+    "rotate.x",
+    "rotate.y",
+    "rotate.z",
+    "scale",
+];
+
 /// Adds random geometric parameters for every object on the path, the point
 /// light and the camera.
 pub fn random_params(
@@ -51,17 +62,8 @@ pub fn random_params(
     lights: &[String],
     rng: &mut Rng,
 ) {
-    const OBJECT: [&str; 7] = [
-        "translate.x",
-        "translate.y",
-        "translate.z",
-        "rotate.x",
-        "rotate.y",
-        "rotate.z",
-        "scale",
-    ];
     for name in s_objects {
-        let f = OBJECT[rng.below(OBJECT.len())];
+        let f = OBJECT_FIELDS[rng.below(OBJECT_FIELDS.len())];
         table.add(&format!("{name}.{f}")).expect("valid key");
     }
     for name in lights {

@@ -1,6 +1,8 @@
 //! The random configuration generator: paths shot from a random camera,
-//! each vertex on its own one-triangle object with a random file transform,
-//! directions from the exact reflection / refraction / microfacet laws.
+//! each vertex on its own one-triangle object (or, with [`Spec::spheres`],
+//! its own exact sphere at non-emitting vertices) with a random file
+//! transform, directions from the exact reflection / refraction / microfacet
+//! laws.
 
 use epsm_core::{ParamTable, PathKind};
 use epsm_render::lights::Background;
@@ -47,6 +49,9 @@ pub struct Spec {
     pub axis: Option<DVec3>,
     /// Range of the angle between the triangle edges at the first vertex, radians.
     pub angle: (f64, f64),
+    /// Place exact spheres (non-uniformly scaled: ellipsoids) instead of
+    /// triangles at the non-emitting vertices.
+    pub spheres: bool,
 }
 
 impl Spec {
@@ -61,6 +66,7 @@ impl Spec {
             cos: (0.3, 1.0),
             axis: None,
             angle: (0.3 * std::f64::consts::PI, 0.7 * std::f64::consts::PI),
+            spheres: false,
         }
     }
 }
@@ -95,7 +101,7 @@ pub fn build(spec: &Spec, rng: &mut Rng) -> Option<Synth> {
         }
         PathKind::Caustic | PathKind::Shadow => {
             let ng = b.facing(wi, (0.3, 1.0));
-            let (at, ns) = b.triangle(x1, ng, diffuse(), false);
+            let (at, ns) = b.surface(x1, ng, diffuse(), false);
             b.push_vertex(
                 at,
                 x1,
@@ -111,7 +117,7 @@ pub fn build(spec: &Spec, rng: &mut Rng) -> Option<Synth> {
                 // The occluder lies before the nearest possible light point (0.6 s).
                 let o = x1 + w * s * 0.6 * b.rng.range(0.3, 0.7);
                 let ong = b.facing(w, (0.3, 1.0));
-                let (oat, _) = b.triangle(o, ong, diffuse(), false);
+                let (oat, _) = b.surface(o, ong, diffuse(), false);
                 b.light(
                     x1,
                     w,
