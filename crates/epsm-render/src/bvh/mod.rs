@@ -109,6 +109,9 @@ pub struct Accel {
     /// (all of them while there are at most [`MAX_LISTED_SPHERES`]).
     listed: Vec<u32>,
     tlas: Tlas,
+    /// No listed spheres and an empty top level: a trace ends after the
+    /// static BVH (one flag, read after its walk).
+    static_only: bool,
     stats: AccelStats,
 }
 
@@ -281,6 +284,7 @@ impl Accel {
     fn rebuild_tlas(&mut self) {
         let start = Instant::now();
         self.tlas = Tlas::build(&self.instances);
+        self.static_only = self.tlas.slots.is_empty() && self.listed.is_empty();
         self.stats.tlas_seconds = start.elapsed().as_secs_f64();
         let world = self.world.as_deref();
         self.stats.objects = self.instances.len();
@@ -367,21 +371,21 @@ impl Accel {
         );
         let mut best = None;
         let mut found = Found::Nothing;
-        let only_static = self.tlas.slots.is_empty() && self.listed.is_empty();
         if let Some(statics) = self.world.as_deref()
             && let Some(flat) = statics.bvh.trace::<ANY>(&mut world, boxes)
         {
             found = Found::World(statics);
             best = Some(flat);
-            if ANY || only_static {
+            if ANY || self.static_only {
                 return hit(found, best);
             }
         }
-        if only_static {
+        if self.static_only {
             return None;
         }
-        if let Some((object, flat)) =
-            self.listed_hit::<ANY>(world.origin, world.dir, world.t_min, world.t_max)
+        if !self.listed.is_empty()
+            && let Some((object, flat)) =
+                self.listed_hit::<ANY>(world.origin, world.dir, world.t_min, world.t_max)
         {
             found = Found::Instance(object);
             best = Some(flat);
