@@ -66,10 +66,7 @@ pub fn local_coords(p: DVec3) -> [f64; 2] {
     if q.z >= 0.0 {
         [q.x, q.y]
     } else {
-        [
-            (1.0 - q.y.abs()).copysign(q.x),
-            (1.0 - q.x.abs()).copysign(q.y),
-        ]
+        fold([q.x, q.y])
     }
 }
 
@@ -79,12 +76,15 @@ pub fn local_coords(p: DVec3) -> [f64; 2] {
 pub fn point(b: [f64; 2]) -> DVec3 {
     let [x, y] = b.map(|v| v.clamp(-1.0, 1.0));
     let z = 1.0 - x.abs() - y.abs();
-    let (x, y) = if z >= 0.0 {
-        (x, y)
-    } else {
-        ((1.0 - y.abs()).copysign(x), (1.0 - x.abs()).copysign(y))
-    };
+    let [x, y] = if z >= 0.0 { [x, y] } else { fold([x, y]) };
     DVec3::new(x, y, z).normalize()
+}
+
+/// The fold of the lower half (`z < 0`) over the square's diagonals, its own
+/// inverse: `(x, y) → ((1 − |y|)·sign x, (1 − |x|)·sign y)`.
+#[inline(always)]
+fn fold([x, y]: [f64; 2]) -> [f64; 2] {
+    [(1.0 - y.abs()).copysign(x), (1.0 - x.abs()).copysign(y)]
 }
 
 /// pbrt-v4's texture coordinates of the unit-sphere point `p`.

@@ -261,7 +261,7 @@ fn exact_sphere(name: String, world_from_object: DAffine3) -> Object {
 fn scenes_with_exact_spheres_match_brute_force_listed_instanced_and_moved() {
     let mut rng = Rng::new(29);
     let mut certain = 0;
-    // Three spheres are tested one by one before the walks, seven go behind
+    // Three spheres are tested one by one after the static walk, seven go behind
     // the top level; both static and dynamic, some mirrored.
     for (round, spheres) in [3, 7, 3, 7].into_iter().enumerate() {
         let mut objects = random_scene(&mut rng);

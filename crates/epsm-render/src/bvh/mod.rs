@@ -13,17 +13,24 @@
 //! `object_from_world` *without* normalising the direction, so the ray
 //! parameter `t` is the same at both levels and in [`Hit::t`].
 //!
+//! Exact spheres ([`Surface::Sphere`]) have no bottom level: a ray mapped to
+//! object space is tested against the unit sphere ([`sphere`]). A scene with
+//! at most `MAX_LISTED_SPHERES` of them tests each after the static BVH's
+//! walk (out of line, so scenes without spheres run the walk's code as
+//! before); more stand behind the top level like any instance.
+//!
 //! Moving an object ([`Accel::update_instance`]) re-reads its transform and
 //! rebuilds only the top level; the first move of a static object makes it
 //! dynamic, which rebuilds the static BVH once without it
 //! ([`Accel::update_instances`] on the objects that will move, before
-//! moving them, does that up front). Objects with empty meshes (or only
-//! zero-area triangles) and objects with singular transforms are never hit.
+//! moving them, does that up front). Mesh objects with empty meshes (or
+//! only zero-area triangles) and objects with singular transforms are never
+//! hit.
 //!
 //! | constant | value | meaning |
 //! |---|---|---|
 //! | `MAX_MERGED_SHARED` | 1024 | a static object whose mesh other objects share is merged into the static BVH only up to this many triangles |
-//! | `MAX_LISTED_SPHERES` | 4 | a scene with at most this many exact spheres tests each before the walks, without the top level |
+//! | `MAX_LISTED_SPHERES` | 4 | a scene with at most this many exact spheres tests each after the static BVH's walk, without the top level |
 //!
 //! No parameters.
 
@@ -66,8 +73,8 @@ const NO_INSTANCE: u32 = u32::MAX;
 /// [`Hit::world_index`] of a hit on an instance.
 const NO_WORLD_INDEX: u32 = u32::MAX;
 
-/// Scenes with at most this many exact spheres test each of them before the
-/// walks instead of walking them through the top level.
+/// Scenes with at most this many exact spheres test each of them after the
+/// static BVH's walk instead of walking them through the top level.
 const MAX_LISTED_SPHERES: usize = 4;
 
 /// Copies of a shared mesh with more triangles than this stay instanced
@@ -105,8 +112,8 @@ pub struct Accel {
     blases: Vec<Arc<Blas>>,
     instances: Vec<Instance>,
     instance_of_object: Vec<u32>,
-    /// Instances of the exact spheres tested one by one before the walks
-    /// (all of them while there are at most [`MAX_LISTED_SPHERES`]).
+    /// Instances of the exact spheres tested one by one after the static
+    /// BVH's walk (all of them while there are at most [`MAX_LISTED_SPHERES`]).
     listed: Vec<u32>,
     tlas: Tlas,
     /// No listed spheres and an empty top level: a trace ends after the
@@ -154,21 +161,21 @@ impl Accel {
         for object in objects {
             *users.entry(Arc::as_ptr(&object.mesh)).or_default() += 1;
         }
+        let spheres = objects
+            .iter()
+            .filter(|o| o.surface == Surface::Sphere)
+            .count();
+        let sphere = if spheres <= MAX_LISTED_SPHERES {
+            Traced::Listed
+        } else {
+            Traced::Sphere
+        };
         for (id, object) in objects.iter().enumerate() {
-            if object.surface == Surface::Sphere {
-                accel.instance_of_object[id] = accel.instances.len() as u32;
-                let unit = Aabb::new(Vec3A::NEG_ONE, Vec3A::ONE);
-                accel.instances.push(Instance::new(
-                    id as ObjectId,
-                    Traced::Sphere,
-                    unit,
-                    &object.world_from_object,
-                ));
-                continue;
-            }
             let shared_large =
                 users[&Arc::as_ptr(&object.mesh)] > 1 && object.mesh.len() > MAX_MERGED_SHARED;
-            let placed = if shared_large || dynamic.contains(&(id as ObjectId)) {
+            let placed = if object.surface == Surface::Sphere {
+                Some((sphere, Aabb::new(Vec3A::NEG_ONE, Vec3A::ONE)))
+            } else if shared_large || dynamic.contains(&(id as ObjectId)) {
                 accel.blas_of(objects, id as ObjectId)
             } else {
                 let local = mesh_bounds(&object.mesh);
@@ -176,25 +183,15 @@ impl Accel {
             };
             if let Some((traced, local)) = placed {
                 accel.instance_of_object[id] = accel.instances.len() as u32;
+                if traced == Traced::Listed {
+                    accel.listed.push(accel.instances.len() as u32);
+                }
                 accel.instances.push(Instance::new(
                     id as ObjectId,
                     traced,
                     local,
                     &object.world_from_object,
                 ));
-            }
-        }
-        let spheres = || {
-            accel
-                .instances
-                .iter()
-                .enumerate()
-                .filter(|(_, i)| i.traced == Traced::Sphere)
-        };
-        if spheres().count() <= MAX_LISTED_SPHERES {
-            accel.listed = spheres().map(|(index, _)| index as u32).collect();
-            for &index in &accel.listed {
-                accel.instances[index as usize].traced = Traced::Listed;
             }
         }
         accel.rebuild_world(objects);

@@ -46,8 +46,8 @@ pub(crate) enum Traced {
     Blas(u32),
     /// As the exact unit sphere ([`crate::sphere`]), behind the top level.
     Sphere,
-    /// As the exact unit sphere, tested before the walks (not in the top
-    /// level).
+    /// As the exact unit sphere, tested after the static BVH's walk (not in
+    /// the top level).
     Listed,
 }
 
