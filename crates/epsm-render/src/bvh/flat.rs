@@ -512,7 +512,7 @@ mod tests {
     #[test]
     fn packet_lanes_match_scalar_test() {
         #[cfg(target_arch = "x86_64")]
-        let avx = crate::bvh::Avx::detect();
+        let avx = crate::bvh::node::Avx::detect();
         let mut rng = Rng::new(9);
         let (built, _) = built_soup(&mut rng, 600);
         let (mut hits, mut second_half_ties) = (0, 0);

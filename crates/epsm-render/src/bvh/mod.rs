@@ -15,9 +15,12 @@
 //!
 //! Exact spheres ([`Surface::Sphere`]) have no bottom level: a ray mapped to
 //! object space is tested against the unit sphere ([`sphere`]). A scene with
-//! at most `MAX_LISTED_SPHERES` of them tests each after the static BVH's
-//! walk (out of line, so scenes without spheres run the walk's code as
-//! before); more stand behind the top level like any instance.
+//! at most `MAX_LISTED_SPHERES` of them lists them and tests each one
+//! directly: the tracer's tile loop for such a scene is compiled to test
+//! them inline before the static BVH's walk, independent of it
+//! (`SpheresFirst`); other walks test them out of line after it, so the
+//! code of scenes without spheres carries nothing of theirs. More spheres
+//! stand behind the top level like any instance.
 //!
 //! Moving an object ([`Accel::update_instance`]) re-reads its transform and
 //! rebuilds only the top level; the first move of a static object makes it
@@ -30,7 +33,7 @@
 //! | constant | value | meaning |
 //! |---|---|---|
 //! | `MAX_MERGED_SHARED` | 1024 | a static object whose mesh other objects share is merged into the static BVH only up to this many triangles |
-//! | `MAX_LISTED_SPHERES` | 4 | a scene with at most this many exact spheres tests each after the static BVH's walk, without the top level |
+//! | `MAX_LISTED_SPHERES` | 4 | a scene with at most this many exact spheres tests each directly, without the top level |
 //!
 //! No parameters.
 
@@ -58,10 +61,10 @@ use crate::scene::{Mesh, Object, ObjectId, Surface};
 use crate::sphere;
 use blas::Blas;
 use flat::FlatHit;
-use node::TraceRay;
 #[cfg(target_arch = "x86_64")]
-pub(crate) use node::{Avx, Avx2};
-pub(crate) use node::{BoxTest, Portable};
+pub(crate) use node::Avx2;
+use node::TraceRay;
+pub(crate) use node::{BoxTest, Portable, SpheresFirst};
 use tlas::{Instance, Tlas, Traced};
 use triangle::PackedTriangle;
 use walk::walk;
@@ -73,8 +76,9 @@ const NO_INSTANCE: u32 = u32::MAX;
 /// [`Hit::world_index`] of a hit on an instance.
 const NO_WORLD_INDEX: u32 = u32::MAX;
 
-/// Scenes with at most this many exact spheres test each of them after the
-/// static BVH's walk instead of walking them through the top level.
+/// Scenes with at most this many exact spheres test each of them directly
+/// (before or after the static BVH's walk) instead of walking them through
+/// the top level.
 const MAX_LISTED_SPHERES: usize = 4;
 
 /// Copies of a shared mesh with more triangles than this stay instanced
@@ -112,7 +116,7 @@ pub struct Accel {
     blases: Vec<Arc<Blas>>,
     instances: Vec<Instance>,
     instance_of_object: Vec<u32>,
-    /// Instances of the exact spheres tested one by one after the static
+    /// Instances of the exact spheres tested one by one beside the static
     /// BVH's walk (all of them while there are at most [`MAX_LISTED_SPHERES`]).
     listed: Vec<u32>,
     tlas: Tlas,
@@ -329,35 +333,62 @@ impl Accel {
         self.trace::<true>(ray, boxes).is_some()
     }
 
+    /// Whether the scene has listed exact spheres: its tile loop is then
+    /// compiled [`SpheresFirst`].
+    #[inline(always)]
+    pub(crate) fn lists_spheres(&self) -> bool {
+        !self.listed.is_empty()
+    }
+
     /// [`Accel::trace`] compiled as the tracer's tile loop is: for AVX2 with
-    /// AVX box tests where the CPU has them ([`Avx2`]), else portable.
+    /// AVX box tests where the CPU has them ([`Avx2`]), else portable, and
+    /// [`SpheresFirst`] when the scene lists spheres.
     #[inline(always)]
     fn trace_detected<const ANY: bool>(&self, ray: &Ray) -> Option<Hit> {
         #[cfg(target_arch = "x86_64")]
         if let Some(avx2) = Avx2::detect() {
-            return self.trace_avx2::<ANY>(ray, avx2);
+            return if self.lists_spheres() {
+                self.trace_avx2::<ANY>(ray, avx2, SpheresFirst(avx2.boxes()))
+            } else {
+                self.trace_avx2::<ANY>(ray, avx2, avx2.boxes())
+            };
         }
-        self.trace::<ANY>(ray, Portable)
+        if self.lists_spheres() {
+            self.trace::<ANY>(ray, SpheresFirst(Portable))
+        } else {
+            self.trace::<ANY>(ray, Portable)
+        }
     }
 
-    /// [`Accel::trace`] compiled with the CPU features of [`Avx2`] (as the
-    /// tile loop), so the AVX box tests inline and the walk's bit scans are
-    /// single instructions (`avx2` proves the CPU has them).
+    /// [`Accel::trace`] with `boxes`, compiled with the CPU features of
+    /// [`Avx2`] (as the tile loop), so the AVX box tests inline and the
+    /// walk's bit scans are single instructions (`_avx2` proves the CPU has
+    /// them).
     #[cfg(target_arch = "x86_64")]
     #[allow(unsafe_code)]
-    fn trace_avx2<const ANY: bool>(&self, ray: &Ray, avx2: Avx2) -> Option<Hit> {
+    fn trace_avx2<const ANY: bool>(
+        &self,
+        ray: &Ray,
+        _avx2: Avx2,
+        boxes: impl BoxTest,
+    ) -> Option<Hit> {
         #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
-        fn with_avx2<const ANY: bool>(accel: &Accel, ray: &Ray, avx: Avx) -> Option<Hit> {
-            accel.trace::<ANY>(ray, avx)
+        fn with_avx2<const ANY: bool>(
+            accel: &Accel,
+            ray: &Ray,
+            boxes: impl BoxTest,
+        ) -> Option<Hit> {
+            accel.trace::<ANY>(ray, boxes)
         }
         // SAFETY: `with_avx2` requires only the features it enables, and an
         // `Avx2` token exists only on a CPU found to have each of them.
-        unsafe { with_avx2::<ANY>(self, ray, avx2.boxes()) }
+        unsafe { with_avx2::<ANY>(self, ray, boxes) }
     }
 
-    /// Traces `ray` through the static BVH and then the top level: the
-    /// closest hit, or with `ANY` the first hit found (whose barycentrics are
-    /// then meaningless).
+    /// Traces `ray` through the listed spheres (when `boxes` is
+    /// [`SpheresFirst`]), the static BVH, the listed spheres (otherwise) and
+    /// then the top level: the closest hit, or with `ANY` the first hit found
+    /// (whose barycentrics are then meaningless).
     #[inline(always)]
     fn trace<const ANY: bool>(&self, ray: &Ray, boxes: impl BoxTest) -> Option<Hit> {
         let mut world = TraceRay::new(
@@ -368,6 +399,14 @@ impl Accel {
         );
         let mut best = None;
         let mut found = Found::Nothing;
+        let first = if boxes.spheres_first() && !self.listed.is_empty() {
+            self.listed_hit::<ANY>(world.origin, world.dir, world.t_min, world.t_max)
+        } else {
+            None
+        };
+        if ANY && let Some((object, flat)) = first {
+            return hit(Found::Instance(object), Some(flat));
+        }
         if let Some(statics) = self.world.as_deref()
             && let Some(flat) = statics.bvh.trace::<ANY>(&mut world, boxes)
         {
@@ -380,10 +419,15 @@ impl Accel {
         if self.static_only {
             return None;
         }
-        if !self.listed.is_empty()
-            && let Some((object, flat)) =
-                self.listed_hit::<ANY>(world.origin, world.dir, world.t_min, world.t_max)
-        {
+        // A sphere wins a tie with a triangle, whichever went first.
+        let listed = if boxes.spheres_first() {
+            first.filter(|(_, flat)| flat.t <= world.t_max)
+        } else if self.listed.is_empty() {
+            None
+        } else {
+            self.listed_hit_outlined::<ANY>(world.origin, world.dir, world.t_min, world.t_max)
+        };
+        if let Some((object, flat)) = listed {
             found = Found::Instance(object);
             best = Some(flat);
             world.t_max = flat.t;
@@ -437,10 +481,24 @@ impl Accel {
         hit(found, best)
     }
 
-    /// The closest hit of `ray` on the listed exact spheres (with `ANY`, the
-    /// first found). Kept out of line: inlined, it made the tile loop of
-    /// scenes without spheres 1.7 % more instructions (callgrind).
+    /// [`Accel::listed_hit`] out of line, after the static BVH's walk (for
+    /// walks not compiled [`SpheresFirst`]): inlined, it made the tile loop
+    /// of scenes without spheres 1.7 % more instructions (callgrind).
     #[inline(never)]
+    fn listed_hit_outlined<const ANY: bool>(
+        &self,
+        origin: Vec3A,
+        dir: Vec3A,
+        t_min: f32,
+        t_max: f32,
+    ) -> Option<(ObjectId, FlatHit)> {
+        self.listed_hit::<ANY>(origin, dir, t_min, t_max)
+    }
+
+    /// The closest hit of the world-space ray `origin + t·dir`, `t` in
+    /// `[t_min, t_max]`, on the listed exact spheres (with `ANY`, the first
+    /// found).
+    #[inline(always)]
     fn listed_hit<const ANY: bool>(
         &self,
         origin: Vec3A,
@@ -570,6 +628,8 @@ fn mesh_bounds(mesh: &Mesh) -> Aabb {
 #[cfg(test)]
 mod tests {
     use super::*;
+    #[cfg(target_arch = "x86_64")]
+    use crate::bvh::node::Avx;
     use epsm_testkit::Rng;
     use glam::{DAffine3, DQuat};
 
@@ -589,6 +649,77 @@ mod tests {
         Arc::new(mesh)
     }
 
+    /// An object of `mesh` (empty for a sphere) and `surface`, scaled by
+    /// `scale`, then rotated about a random axis and moved into `[-2, 2]³`.
+    fn placed(rng: &mut Rng, mesh: Arc<Mesh>, surface: Surface, scale: DVec3) -> Object {
+        Object {
+            name: "placed".into(),
+            mesh,
+            world_from_object: DAffine3::from_scale_rotation_translation(
+                scale,
+                DQuat::from_axis_angle(rng.unit(), rng.range(0.0, 6.0)),
+                rng.dvec3(-2.0, 2.0),
+            ),
+            material: 0,
+            emission: None,
+            surface,
+        }
+    }
+
+    /// Listed spheres tested first ([`SpheresFirst`]) or after the static
+    /// walk give the same closest hit and the same occlusion, with portable
+    /// and (when the CPU has it) AVX tests, on scenes with static and
+    /// dynamic meshes and spheres, one of them mirrored.
+    #[test]
+    fn spheres_first_and_after_find_the_same_hits() {
+        let mut rng = Rng::new(23);
+        let (big, small) = (soup(&mut rng, 2000), soup(&mut rng, 40));
+        let mut objects: Vec<Object> = (0..4)
+            .map(|i| {
+                let mesh = Arc::clone(if i % 2 == 0 { &big } else { &small });
+                let scale = rng.dvec3(0.3, 1.5);
+                placed(&mut rng, mesh, Surface::Mesh, scale)
+            })
+            .collect();
+        for i in 0..3 {
+            let mut scale = rng.dvec3(0.7, 1.5);
+            if i == 1 {
+                scale.y = -scale.y;
+            }
+            let sphere = placed(&mut rng, Arc::default(), Surface::Sphere, scale);
+            objects.push(sphere);
+        }
+        let first = SpheresFirst(Portable);
+        #[cfg(target_arch = "x86_64")]
+        let avx = Avx::detect().map(|avx| (avx, SpheresFirst(avx)));
+        for dynamic in [&[][..], &[1, 5]] {
+            let accel = Accel::build_with_dynamic(&objects, dynamic);
+            assert!(accel.lists_spheres());
+            let mut on_spheres = 0;
+            for i in 0..20_000 {
+                let origin = rng.dvec3(-4.0, 4.0).as_vec3();
+                let mut ray = Ray::new(origin, rng.unit().as_vec3() * rng.range(0.5, 2.0) as f32);
+                if i % 3 == 0 {
+                    ray.t_max = rng.range(0.0, 4.0) as f32;
+                }
+                let after = accel.trace::<false>(&ray, Portable);
+                let occluded = accel.trace::<true>(&ray, Portable).is_some();
+                assert_eq!(accel.trace::<false>(&ray, first), after, "ray {i}: {ray:?}");
+                assert_eq!(accel.trace::<true>(&ray, first).is_some(), occluded);
+                assert_eq!(occluded, after.is_some());
+                #[cfg(target_arch = "x86_64")]
+                if let Some((avx, avx_first)) = avx {
+                    assert_eq!(accel.trace::<false>(&ray, avx), after, "ray {i}");
+                    assert_eq!(accel.trace::<false>(&ray, avx_first), after, "ray {i}");
+                    assert_eq!(accel.trace::<true>(&ray, avx).is_some(), occluded);
+                    assert_eq!(accel.trace::<true>(&ray, avx_first).is_some(), occluded);
+                }
+                on_spheres += usize::from(after.is_some_and(|h| h.object >= 4));
+            }
+            assert!(on_spheres > 1000, "{on_spheres} sphere hits");
+        }
+    }
+
     /// The AVX box tests (when the CPU has AVX) find exactly the hits of the
     /// portable ones, through the static BVH and through instances.
     #[test]
@@ -602,17 +733,10 @@ mod tests {
         let mut rng = Rng::new(17);
         let (big, small) = (soup(&mut rng, 3000), soup(&mut rng, 50));
         let objects: Vec<Object> = (0..6)
-            .map(|i| Object {
-                name: format!("o{i}"),
-                mesh: Arc::clone(if i % 2 == 0 { &big } else { &small }),
-                world_from_object: DAffine3::from_scale_rotation_translation(
-                    rng.dvec3(0.3, 2.0),
-                    DQuat::from_axis_angle(rng.unit(), rng.range(0.0, 6.0)),
-                    rng.dvec3(-2.0, 2.0),
-                ),
-                material: 0,
-                emission: None,
-                surface: Surface::Mesh,
+            .map(|i| {
+                let mesh = Arc::clone(if i % 2 == 0 { &big } else { &small });
+                let scale = rng.dvec3(0.3, 2.0);
+                placed(&mut rng, mesh, Surface::Mesh, scale)
             })
             .collect();
         let accel = Accel::build_with_dynamic(&objects, &[1, 4]);

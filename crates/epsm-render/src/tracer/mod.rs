@@ -21,8 +21,8 @@ mod path;
 use path::{Recording, trace_path};
 
 #[cfg(target_arch = "x86_64")]
-use crate::bvh::{Avx, Avx2};
-use crate::bvh::{BoxTest, Portable};
+use crate::bvh::Avx2;
+use crate::bvh::{BoxTest, Portable, SpheresFirst};
 use crate::camera::FilmRays;
 use crate::film::Image;
 use crate::ray::Ray;
@@ -303,7 +303,9 @@ struct TileOutput {
 
 /// Renders one tile, with the AVX2 build of the tracer (and AVX box tests)
 /// where the CPU has it; with `log`, with the portable build and every ray
-/// cast logged (the same image: module docs of `bvh::node`).
+/// cast logged (the same image: module docs of `bvh::node`). A scene that
+/// lists exact spheres gets the build that tests them before each walk
+/// ([`SpheresFirst`]; the same hits).
 #[allow(unsafe_code)]
 fn render_tile(
     scene: &Scene,
@@ -317,14 +319,33 @@ fn render_tile(
         let out = render_tile_body(scene, opts, level, tile, &mut rays, Portable);
         return TileOutput { rays, ..out };
     }
+    let spheres = scene.accel().lists_spheres();
     #[cfg(target_arch = "x86_64")]
     if let Some(avx2) = Avx2::detect() {
+        let avx = avx2.boxes();
         // SAFETY: `render_tile_avx2` only requires the CPU features it
         // enables, and an `Avx2` exists only on a CPU found to have each of
         // them (AVX2 implies the AVX and SSE levels below it).
-        return unsafe { render_tile_avx2(scene, opts, level, tile, avx2.boxes()) };
+        return unsafe {
+            if spheres {
+                render_tile_avx2(scene, opts, level, tile, SpheresFirst(avx))
+            } else {
+                render_tile_avx2(scene, opts, level, tile, avx)
+            }
+        };
     }
-    render_tile_body(scene, opts, level, tile, &mut NoSink, Portable)
+    if spheres {
+        render_tile_body(
+            scene,
+            opts,
+            level,
+            tile,
+            &mut NoSink,
+            SpheresFirst(Portable),
+        )
+    } else {
+        render_tile_body(scene, opts, level, tile, &mut NoSink, Portable)
+    }
 }
 
 /// [`render_tile_body`] compiled for AVX2 and the bit-manipulation
@@ -335,6 +356,7 @@ fn render_tile(
 /// instructions per sample on `scenes/caustic-box.toml`). No fused
 /// multiply-add is enabled, so every operation rounds as in the baseline
 /// build and images are bit-identical on CPUs with and without AVX2.
+/// `boxes` are the AVX tests, [`SpheresFirst`] or not.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
 fn render_tile_avx2(
@@ -342,9 +364,9 @@ fn render_tile_avx2(
     opts: &RenderOptions,
     level: Option<RecordLevel>,
     tile: UVec2,
-    avx: Avx,
+    boxes: impl BoxTest,
 ) -> TileOutput {
-    render_tile_body(scene, opts, level, tile, &mut NoSink, avx)
+    render_tile_body(scene, opts, level, tile, &mut NoSink, boxes)
 }
 
 /// Renders one tile, box tests by `boxes`, every ray cast reported to `sink`.
