@@ -8,8 +8,9 @@ use bvh_util::{Rng, grid, object, random_scene, random_transform, soup};
 use epsm_render::Ray;
 use epsm_render::bvh::Accel;
 use epsm_render::frame::Frame;
-use epsm_render::hit::{intersect_triangle_f64, surface_point_f64};
-use glam::{DAffine3, DVec3, Vec2, Vec3};
+use epsm_render::hit::{TexCoords, intersect_triangle_f64, surface_point_f64};
+use epsm_render::scene::{Mesh, Object, Surface};
+use glam::{DAffine3, DVec2, DVec3, Vec2, Vec3};
 
 #[test]
 fn surface_points_are_unit_consistent_and_on_the_ray() {
@@ -40,7 +41,7 @@ fn surface_points_are_unit_consistent_and_on_the_ray() {
             let expected = (mirror * mapped).normalize().as_vec3();
             assert!(sp.ng.distance(expected) < 1e-4, "{sp:?} vs {expected}");
             assert_eq!(sp.ns(), sp.ng);
-            assert_eq!(sp.uv, Vec2::new(hit.b1, hit.b2));
+            assert_eq!(sp.uv.get(), Vec2::new(hit.b1, hit.b2));
             checked[0] += 1;
         } else {
             assert!(
@@ -51,9 +52,9 @@ fn surface_points_are_unit_consistent_and_on_the_ray() {
             let local = w.inverse().transform_point3(sp.p.as_dvec3());
             let expected = Vec2::new(local.x as f32 + 1.0, local.z as f32 + 1.0) * 0.5;
             assert!(
-                sp.uv.distance(expected) < 1e-4,
+                sp.uv.get().distance(expected) < 1e-4,
                 "uv {} vs {expected}",
-                sp.uv
+                sp.uv.get()
             );
             checked[1] += 1;
         }
@@ -194,10 +195,58 @@ fn static_table_and_instance_placement_agree() {
             a.p.distance(b.p) < 1e-4 * (1.0 + hit.t)
                 && a.ng.distance(b.ng) < 1e-4
                 && a.ns().distance(b.ns()) < 1e-4
-                && a.uv.distance(b.uv) < 1e-5,
+                && a.uv.get().distance(b.uv.get()) < 1e-5,
             "{a:?} vs {b:?}"
         );
         checked += 1;
     }
     assert!(checked > 500, "{checked} hits");
+}
+
+/// On an exact sphere the shading point's texture coordinates are pbrt-v4's
+/// spherical coordinates of the object-space hit point, made only when read
+/// (a triangle's are known when the point is made).
+#[test]
+fn exact_sphere_texture_coordinates_are_spherical_and_lazy() {
+    let mut rng = Rng::new(41);
+    let objects: Vec<Object> = (0..3)
+        .map(|i| Object {
+            name: format!("s{i}"),
+            mesh: Arc::new(Mesh::default()),
+            world_from_object: random_transform(&mut rng, i == 1),
+            material: 0,
+            emission: None,
+            surface: Surface::Sphere,
+        })
+        .collect();
+    let accel = Accel::build(&objects);
+    let mut checked = 0;
+    for _ in 0..2000 {
+        let origin = rng.dvec3(-4.0, 4.0).as_vec3();
+        let ray = Ray::new(origin, rng.unit().as_vec3());
+        let Some(hit) = accel.closest_hit(&ray) else {
+            continue;
+        };
+        let sp = accel.surface_point(&objects, &hit);
+        let TexCoords::Sphere(local) = sp.uv else {
+            panic!("{:?} on a sphere", sp.uv);
+        };
+        let w = objects[hit.object as usize].world_from_object;
+        let p = w.inverse().transform_point3(sp.p.as_dvec3()).normalize();
+        assert!(local.as_dvec3().distance(p) < 1e-4, "{local} vs {p}");
+        let phi = p.y.atan2(p.x).rem_euclid(std::f64::consts::TAU);
+        let expected = DVec2::new(
+            phi / std::f64::consts::TAU,
+            p.z.acos() / std::f64::consts::PI,
+        );
+        let uv = sp.uv.get().as_dvec2();
+        // `u` wraps at φ = 0.
+        let du = (uv.x - expected.x).abs();
+        assert!(
+            du.min(1.0 - du) < 1e-4 && (uv.y - expected.y).abs() < 1e-4,
+            "uv {uv} vs {expected}"
+        );
+        checked += 1;
+    }
+    assert!(checked > 200, "{checked} hits");
 }

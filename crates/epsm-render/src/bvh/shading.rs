@@ -19,7 +19,7 @@
 use glam::{DMat3, DVec3, Vec2, Vec3};
 
 use crate::frame::Frame;
-use crate::hit::{self, SurfacePoint};
+use crate::hit::{self, SurfacePoint, TexCoords};
 use crate::scene::Object;
 
 /// How a static triangle's shading normal is found.
@@ -120,6 +120,11 @@ impl ShadingTriangle {
             Some(uvs) => hit::interpolate_uv(uvs, b1, b2),
             None => Vec2::new(b1, b2),
         };
-        SurfacePoint { p, ng, uv, frame }
+        SurfacePoint {
+            p,
+            ng,
+            uv: TexCoords::Uv(uv),
+            frame,
+        }
     }
 }

@@ -20,6 +20,7 @@ use std::f32::consts::{FRAC_1_PI, FRAC_PI_4};
 use glam::{Vec2, Vec3};
 
 use super::{BsdfSample, Lobe, Texture};
+use crate::hit::TexCoords;
 
 /// Lambertian reflection.
 #[derive(Clone, Debug, PartialEq)]
@@ -31,7 +32,7 @@ pub struct Diffuse {
 impl Diffuse {
     /// Samples a cosine-distributed `wo` (local, upper hemisphere; `wi.z > 0`).
     #[inline(always)]
-    pub(super) fn sample(&self, uv: Vec2, u: Vec2) -> Option<BsdfSample> {
+    pub(super) fn sample(&self, uv: TexCoords, u: Vec2) -> Option<BsdfSample> {
         let wo = cosine_hemisphere(u);
         let pdf = wo.z * FRAC_1_PI;
         if pdf <= 0.0 {
@@ -49,7 +50,7 @@ impl Diffuse {
 
     /// `albedo/π · cos θo` when both directions are above the surface.
     #[inline]
-    pub(super) fn eval(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> Vec3 {
+    pub(super) fn eval(&self, wi: Vec3, wo: Vec3, uv: TexCoords) -> Vec3 {
         if wi.z <= 0.0 || wo.z <= 0.0 {
             return Vec3::ZERO;
         }

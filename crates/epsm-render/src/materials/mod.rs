@@ -37,6 +37,7 @@ pub use rough_conductor::RoughConductor;
 pub use texture::Texture;
 
 use crate::frame::Frame;
+use crate::hit::TexCoords;
 
 /// The BSDF of a material.
 #[derive(Clone, Debug, PartialEq)]
@@ -157,14 +158,20 @@ impl Material {
     /// (`−z` for the smooth conductor and diffuse seen from the back).
     /// Dielectrics have an inside and are never mirrored (`m = +z` always).
     #[inline(always)]
-    pub fn sample(&self, wi: Vec3, uv: Vec2, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
+    pub fn sample(
+        &self,
+        wi: Vec3,
+        uv: impl Into<TexCoords>,
+        u_lobe: f32,
+        u: Vec2,
+    ) -> Option<BsdfSample> {
         let side = match &self.bsdf {
             Bsdf::Dielectric(d) => return d.sample(wi, u_lobe),
             _ => self.side(wi)?,
         };
         let wi = side.apply(wi);
         let s = match &self.bsdf {
-            Bsdf::Diffuse(d) => d.sample(uv, u),
+            Bsdf::Diffuse(d) => d.sample(uv.into(), u),
             Bsdf::Conductor(c) => c.sample(wi),
             Bsdf::RoughConductor(r) => r.sample(wi, u),
             Bsdf::Dielectric(_) => None,
@@ -180,13 +187,13 @@ impl Material {
     /// for delta lobes, for directions in opposite hemispheres and for the
     /// back face of one-sided materials.
     #[inline(always)]
-    pub fn eval(&self, wi: Vec3, wo: Vec3, uv: Vec2) -> Vec3 {
+    pub fn eval(&self, wi: Vec3, wo: Vec3, uv: impl Into<TexCoords>) -> Vec3 {
         let Some(side) = self.side(wi) else {
             return Vec3::ZERO;
         };
         let (wi, wo) = (side.apply(wi), side.apply(wo));
         match &self.bsdf {
-            Bsdf::Diffuse(d) => d.eval(wi, wo, uv),
+            Bsdf::Diffuse(d) => d.eval(wi, wo, uv.into()),
             Bsdf::RoughConductor(r) => r.eval(wi, wo),
             Bsdf::Conductor(_) | Bsdf::Dielectric(_) => Vec3::ZERO,
         }
@@ -196,7 +203,7 @@ impl Material {
     /// lobe (zero where `eval` is zero by construction, and for delta lobes).
     /// No current lobe's pdf depends on the texture coordinates `_uv`.
     #[inline(always)]
-    pub fn pdf(&self, wi: Vec3, wo: Vec3, _uv: Vec2) -> f32 {
+    pub fn pdf(&self, wi: Vec3, wo: Vec3, _uv: impl Into<TexCoords>) -> f32 {
         let Some(side) = self.side(wi) else {
             return 0.0;
         };

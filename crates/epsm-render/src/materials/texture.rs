@@ -15,9 +15,10 @@
 
 use std::sync::Arc;
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 
 use crate::film::Image;
+use crate::hit::TexCoords;
 
 /// A colour that is constant or looked up in an image by texture coordinates.
 #[derive(Clone, Debug, PartialEq)]
@@ -29,12 +30,13 @@ pub enum Texture {
 }
 
 impl Texture {
-    /// The linear-RGB value at texture coordinates `uv`.
+    /// The linear-RGB value at texture coordinates `uv` (evaluated only
+    /// for an image).
     #[inline]
-    pub fn eval(&self, uv: Vec2) -> Vec3 {
+    pub fn eval(&self, uv: impl Into<TexCoords>) -> Vec3 {
         match self {
             Texture::Constant(c) => *c,
-            Texture::Image(image) => image.lookup(uv),
+            Texture::Image(image) => image.lookup(uv.into().get()),
         }
     }
 }
@@ -42,6 +44,7 @@ impl Texture {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::Vec2;
 
     #[test]
     fn constant_texture_ignores_uv_and_image_texture_reads_pixels() {
