@@ -261,9 +261,9 @@ fn exact_sphere(name: String, world_from_object: DAffine3) -> Object {
 fn scenes_with_exact_spheres_match_brute_force_listed_instanced_and_moved() {
     let mut rng = Rng::new(29);
     let mut certain = 0;
-    // Three spheres are tested one by one after the static walk, seven go behind
-    // the top level; both static and dynamic, some mirrored.
-    for (round, spheres) in [3, 7, 3, 7].into_iter().enumerate() {
+    // Two spheres are listed (tested one by one beside the static walk), seven
+    // go behind the top level; both static and dynamic, some mirrored.
+    for (round, spheres) in [2, 7, 2, 7].into_iter().enumerate() {
         let mut objects = random_scene(&mut rng);
         let first = objects.len() as u32;
         for k in 0..spheres {
@@ -273,7 +273,7 @@ fn scenes_with_exact_spheres_match_brute_force_listed_instanced_and_moved() {
         let dynamic: Vec<u32> = if round < 2 {
             vec![]
         } else {
-            vec![0, first, first + 2]
+            vec![0, first, first + 1]
         };
         let mut accel = Accel::build_with_dynamic(&objects, &dynamic);
         certain += check_against_brute_force(&mut rng, &objects, &accel, 1500);

@@ -33,7 +33,7 @@
 //! | constant | value | meaning |
 //! |---|---|---|
 //! | `MAX_MERGED_SHARED` | 1024 | a static object whose mesh other objects share is merged into the static BVH only up to this many triangles |
-//! | `MAX_LISTED_SPHERES` | 4 | a scene with at most this many exact spheres tests each directly, without the top level |
+//! | `MAX_LISTED_SPHERES` | 2 | a scene with at most this many exact spheres tests each directly, without the top level |
 //!
 //! No parameters.
 
@@ -78,8 +78,11 @@ const NO_WORLD_INDEX: u32 = u32::MAX;
 
 /// Scenes with at most this many exact spheres test each of them directly
 /// (before or after the static BVH's walk) instead of walking them through
-/// the top level.
-const MAX_LISTED_SPHERES: usize = 4;
+/// the top level. Measured on the Cornell box with 1–8 spheres of radius
+/// 0.22 on its floor (docs/performance.md, session 19): listed, one sphere
+/// renders 6–8 % faster than through the top level, two the same, three
+/// and more slower (8 spheres 20–25 %).
+const MAX_LISTED_SPHERES: usize = 2;
 
 /// Copies of a shared mesh with more triangles than this stay instanced
 /// (merging them would copy the mesh once per object).
@@ -681,7 +684,7 @@ mod tests {
                 placed(&mut rng, mesh, Surface::Mesh, scale)
             })
             .collect();
-        for i in 0..3 {
+        for i in 0..MAX_LISTED_SPHERES {
             let mut scale = rng.dvec3(0.7, 1.5);
             if i == 1 {
                 scale.y = -scale.y;
@@ -716,7 +719,7 @@ mod tests {
                 }
                 on_spheres += usize::from(after.is_some_and(|h| h.object >= 4));
             }
-            assert!(on_spheres > 1000, "{on_spheres} sphere hits");
+            assert!(on_spheres > 500, "{on_spheres} sphere hits");
         }
     }
 
