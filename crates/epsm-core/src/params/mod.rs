@@ -40,8 +40,8 @@ use crate::error::{Error, Result};
 
 mod target;
 
-pub use target::Target;
 use target::{AXES, Names, parse};
+pub use target::{OBJECT_FIELDS, Target};
 
 /// One named parameter and its current value.
 #[derive(Clone, Debug, PartialEq)]

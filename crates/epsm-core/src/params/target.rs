@@ -170,7 +170,9 @@ pub(super) fn parse(names: &Names, key: &str) -> Result<Target> {
     Ok(target)
 }
 
-const FIELDS: [&str; 15] = [
+/// The fields that move or shape an object (module table of
+/// [`params`](super)).
+pub const OBJECT_FIELDS: [&str; 7] = [
     "translate.x",
     "translate.y",
     "translate.z",
@@ -178,6 +180,17 @@ const FIELDS: [&str; 15] = [
     "rotate.y",
     "rotate.z",
     "scale",
+];
+
+/// Every field: [`OBJECT_FIELDS`], then the camera's and the materials'.
+const FIELDS: [&str; 15] = [
+    OBJECT_FIELDS[0],
+    OBJECT_FIELDS[1],
+    OBJECT_FIELDS[2],
+    OBJECT_FIELDS[3],
+    OBJECT_FIELDS[4],
+    OBJECT_FIELDS[5],
+    OBJECT_FIELDS[6],
     "yaw",
     "pitch",
     "albedo.r",

@@ -11,6 +11,8 @@ use epsm_core::check::{CheckReport, CheckSettings, check_path};
 use epsm_core::{ParamTable, PathKind, classify};
 
 #[allow(unused_imports)]
+pub use epsm_core::params::OBJECT_FIELDS;
+#[allow(unused_imports)]
 pub use synth::{End, Rng, Spec, Synth, Vertex, build};
 
 /// Classifies a synthetic configuration and checks its paths of `kind`;
@@ -42,17 +44,6 @@ pub fn check_kind(
     }
     n
 }
-
-/// The geometric parameter fields of an object.
-pub const OBJECT_FIELDS: [&str; 7] = [
-    "translate.x",
-    "translate.y",
-    "translate.z",
-    "rotate.x",
-    "rotate.y",
-    "rotate.z",
-    "scale",
-];
 
 /// Adds random geometric parameters for every object on the path, the point
 /// light and the camera.
