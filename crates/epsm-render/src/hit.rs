@@ -44,8 +44,9 @@ pub struct Hit {
 /// A shading point's texture coordinates, evaluated when a texture reads
 /// them ([`TexCoords::get`]): a triangle's are known when the point is made;
 /// an exact sphere's cost two inverse trigonometric functions, which
-/// materials without an image texture never pay (2.5–3 % of a render of
-/// `scenes/cornell-box.toml`, whose glass sphere reads none).
+/// materials without an image texture never pay (`scenes/cornell-box.toml`'s
+/// glass sphere reads none; docs/performance.md, session 19: 2.5–3 % in one
+/// pair of runs, inside the noise in another).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum TexCoords {
     /// Known coordinates.
