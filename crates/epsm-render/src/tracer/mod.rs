@@ -32,7 +32,8 @@ use crate::scene::Scene;
 
 /// Side of the square tiles rendered by one task.
 pub const TILE: u32 = 16;
-const DIMS_PER_BOUNCE: u32 = 8;
+/// Dimensions per bounce: one sampler [`Block`](crate::sampler::Block).
+const DIMS_PER_BOUNCE: u32 = crate::sampler::BLOCK as u32;
 /// The dimension of the film position (two numbers).
 const DIM_FILM: u32 = 0;
 /// The first dimension of bounce 0's block.

@@ -249,7 +249,7 @@ fn next_event(
     scene: &Scene,
     at: &Shading<'_>,
     beta: Vec3,
-    numbers: &Block<'_>,
+    numbers: &Block,
     record_at: Option<u32>,
     counters: &mut TraceCounters,
     sink: &mut impl RaySink,
