@@ -276,6 +276,7 @@ fn scenes_with_exact_spheres_match_brute_force_listed_instanced_and_moved() {
             vec![0, first, first + 1]
         };
         let mut accel = Accel::build_with_dynamic(&objects, &dynamic);
+        assert_eq!(accel.stats().spheres, spheres);
         certain += check_against_brute_force(&mut rng, &objects, &accel, 1500);
         for id in [first, first + 1] {
             objects[id as usize].world_from_object = random_transform(&mut rng, false);

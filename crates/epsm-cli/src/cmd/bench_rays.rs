@@ -116,6 +116,8 @@ struct Report {
     #[serde(skip_serializing_if = "Option::is_none")]
     spp: Option<u32>,
     triangles: usize,
+    /// Exact spheres (`shape = "sphere"` with `exact = true`).
+    spheres: usize,
     instances: usize,
     build_seconds: f64,
     /// Moving one instance and updating the top level (the sphere only).
@@ -152,6 +154,7 @@ pub fn run(args: &RaysBenchArgs) -> anyhow::Result<()> {
                 scene: Some(path.display().to_string()),
                 spp: Some(args.spp),
                 triangles: stats.triangles,
+                spheres: stats.spheres,
                 instances: stats.objects,
                 build_seconds: stats.build_seconds,
                 tlas_update_seconds: None,
@@ -250,6 +253,7 @@ fn sphere(args: &RaysBenchArgs) -> anyhow::Result<()> {
         scene: None,
         spp: None,
         triangles: mesh.len(),
+        spheres: stats.spheres,
         instances: stats.objects,
         build_seconds,
         tlas_update_seconds: Some(tlas_update_seconds),
@@ -319,8 +323,9 @@ fn print(report: &Report, json: bool) -> anyhow::Result<()> {
         .map(|s| format!(", TLAS update {:.1} µs", s * 1e6))
         .unwrap_or_default();
     println!(
-        "{} triangles, {} instances: build {:.1} ms{update}, {:.1} MB",
+        "{} triangles, {} exact sphere(s), {} instances: build {:.1} ms{update}, {:.1} MB",
         report.triangles,
+        report.spheres,
         report.instances,
         report.build_seconds * 1e3,
         report.accel_bytes as f64 / 1e6

@@ -100,6 +100,8 @@ pub struct AccelStats {
     pub triangles: usize,
     /// Triangles left out for zero area or non-finite vertices.
     pub degenerate_triangles: usize,
+    /// Exact spheres ([`Surface::Sphere`] objects with an instance).
+    pub spheres: usize,
     /// Time of the whole build, seconds.
     pub build_seconds: f64,
     /// Time of the last top-level build, seconds.
@@ -292,6 +294,11 @@ impl Accel {
         self.stats.tlas_seconds = start.elapsed().as_secs_f64();
         let world = self.world.as_deref();
         self.stats.objects = self.instances.len();
+        self.stats.spheres = self
+            .instances
+            .iter()
+            .filter(|i| matches!(i.traced, Traced::Listed | Traced::Sphere))
+            .count();
         self.stats.blas_count = self.blases.len() + usize::from(world.is_some());
         self.stats.triangles =
             self.blases.iter().map(|b| b.len()).sum::<usize>() + world.map_or(0, |w| w.bvh.len());
