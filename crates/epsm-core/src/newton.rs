@@ -226,12 +226,26 @@ pub fn central_difference(
     Ok((4.0 * d2 - d1) / 3.0)
 }
 
+/// How closely (relative) the closest pair of a [`stable_difference`] whose
+/// large steps failed must agree: a hundredth of the tests' 1e-6 tolerance,
+/// so the oracle's own spread cannot pass or fail a derivative.
+pub const SKIPPED_STEPS_AGREEMENT: f64 = 1e-8;
+
 /// [`central_difference`] at the step where it is most stable: estimates at
 /// `4h, h, h/4, h/16, h/64` are compared pairwise (neighbours), and the
 /// smaller-step estimate of the closest pair is returned. Truncation error
 /// shrinks with the step and the re-solves' rounding noise grows as it
 /// shrinks; the closest neighbours sit where both are small, so strongly
 /// curved paths get small steps and flat ones keep large steps.
+///
+/// A step whose re-solves fail before any smaller one succeeded is skipped:
+/// on a strongly curved path (long chains over spheres) `θ ± 4h` can leave
+/// Newton's basin of the path, or the configuration space, while the
+/// smaller steps stay in it. Such a path is near a fold, where the
+/// estimates of neighbouring steps can disagree, so its estimate is kept
+/// only when the closest pair agrees to [`SKIPPED_STEPS_AGREEMENT`]
+/// (relative); otherwise, or when fewer than two neighbouring steps
+/// succeed, the path is dropped with the first failed step's reason.
 pub fn stable_difference(
     path: &DiffPath,
     table: &ParamTable,
@@ -241,16 +255,33 @@ pub fn stable_difference(
     newton: &NewtonSettings,
 ) -> Result<DVec2, Dropped> {
     let mut best: Option<(f64, DVec2)> = None;
-    let mut prev = central_difference(path, table, param, 4.0 * h, settings, newton)?;
-    let mut step = h;
-    for _ in 0..4 {
-        let next = central_difference(path, table, param, step, settings, newton)?;
-        let gap = (next - prev).length();
-        if best.is_none_or(|(g, _)| gap < g) {
-            best = Some((gap, next));
+    let mut prev: Option<DVec2> = None;
+    let mut first_failure = None;
+    let mut step = 4.0 * h;
+    for _ in 0..5 {
+        match central_difference(path, table, param, step, settings, newton) {
+            Ok(next) => {
+                if let Some(prev) = prev {
+                    let gap = (next - prev).length();
+                    if best.is_none_or(|(g, _)| gap < g) {
+                        best = Some((gap, next));
+                    }
+                }
+                prev = Some(next);
+            }
+            // Past a success, smaller steps only add rounding noise.
+            Err(_) if prev.is_some() => break,
+            Err(e) => {
+                first_failure.get_or_insert(e);
+            }
         }
-        prev = next;
         step *= 0.25;
     }
-    Ok(best.map_or(prev, |(_, d)| d))
+    match (best, first_failure) {
+        (Some((_, d)), None) => Ok(d),
+        (Some((gap, d)), Some(_)) if gap <= SKIPPED_STEPS_AGREEMENT * d.length() => Ok(d),
+        (_, Some(e)) => Err(e),
+        // Five steps without a failure leave a closest pair.
+        (None, None) => unreachable!("five successful steps compare four pairs"),
+    }
 }
