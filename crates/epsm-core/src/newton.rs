@@ -226,8 +226,8 @@ pub fn central_difference(
     Ok((4.0 * d2 - d1) / 3.0)
 }
 
-/// How closely (relative) the closest pair of a [`stable_difference`] whose
-/// large steps failed must agree: a hundredth of the tests' 1e-6 tolerance,
+/// How closely (relative) the closest pair of a [`stable_difference`] with
+/// a failed step must agree: a hundredth of the tests' 1e-6 tolerance,
 /// so the oracle's own spread cannot pass or fail a derivative.
 pub const SKIPPED_STEPS_AGREEMENT: f64 = 1e-8;
 
@@ -241,11 +241,12 @@ pub const SKIPPED_STEPS_AGREEMENT: f64 = 1e-8;
 /// A step whose re-solves fail before any smaller one succeeded is skipped:
 /// on a strongly curved path (long chains over spheres) `θ ± 4h` can leave
 /// Newton's basin of the path, or the configuration space, while the
-/// smaller steps stay in it. Such a path is near a fold, where the
-/// estimates of neighbouring steps can disagree, so its estimate is kept
-/// only when the closest pair agrees to [`SKIPPED_STEPS_AGREEMENT`]
-/// (relative); otherwise, or when fewer than two neighbouring steps
-/// succeed, the path is dropped with the first failed step's reason.
+/// smaller steps stay in it; a failure after a success ends the search.
+/// A path with any failed step is near a fold, where the estimates of
+/// neighbouring steps can disagree, so its estimate is kept only when the
+/// closest pair agrees to [`SKIPPED_STEPS_AGREEMENT`] (relative);
+/// otherwise, or when fewer than two neighbouring steps succeed, the path
+/// is dropped with the first failed step's reason.
 pub fn stable_difference(
     path: &DiffPath,
     table: &ParamTable,
@@ -269,10 +270,13 @@ pub fn stable_difference(
                 }
                 prev = Some(next);
             }
-            // Past a success, smaller steps only add rounding noise.
-            Err(_) if prev.is_some() => break,
             Err(e) => {
                 first_failure.get_or_insert(e);
+                // Past a success, a failure ends the search (smaller steps
+                // than one that fails only add rounding noise).
+                if prev.is_some() {
+                    break;
+                }
             }
         }
         step *= 0.25;
