@@ -20,6 +20,7 @@ use glam::{Affine3A, DAffine3, DMat3, DVec3, Mat3A, Vec2, Vec3};
 
 use crate::frame::Frame;
 use crate::scene::{Mesh, Object, ObjectId};
+use crate::sphere::MissTest;
 
 /// A ray hit as the BVH reports it.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -107,6 +108,9 @@ pub(crate) struct Placement {
     pub object_from_world: Affine3A,
     /// Object-space normal → world-space normal (not normalised).
     pub normal_from_object: Mat3A,
+    /// The world-space miss test of the unit sphere so placed (for objects
+    /// that are exact spheres).
+    pub sphere: MissTest,
 }
 
 impl Placement {
@@ -115,6 +119,7 @@ impl Placement {
         world_from_object: Affine3A::IDENTITY,
         object_from_world: Affine3A::IDENTITY,
         normal_from_object: Mat3A::IDENTITY,
+        sphere: MissTest::UNIT,
     };
 
     /// The `f32` placement of `world_from_object`; `None` when the transform
@@ -129,6 +134,7 @@ impl Placement {
             world_from_object: world_from_object.as_affine3a(),
             object_from_world: inverse.as_affine3a(),
             normal_from_object: inverse.matrix3.transpose().as_mat3().into(),
+            sphere: MissTest::new(world_from_object),
         };
         let finite = placement.object_from_world.is_finite()
             && placement.world_from_object.is_finite()

@@ -27,7 +27,8 @@
 //! the inner children entered before `t_max` on a stack sorted by entry
 //! distance, nearest on top, and continues with the nearest pending node not
 //! culled by the current `t_max`. With `ANY` (occlusion, shadow rays) it
-//! returns at the first hit within `[t_min, t_max]`.
+//! returns at the first hit within `[t_min, t_max]`, and computes the ray's
+//! shear only when it reaches a packet (module `node`, [`TraceRay`]).
 //!
 //! The packet loop runs over the node's packets in order and skips one
 //! without a leaf child hit by a byte the node stores per packet (the union
@@ -71,6 +72,7 @@ use std::mem::MaybeUninit;
 use super::blas::SlotTriangles;
 use super::node::{BoxTest, ChildBoxes, TraceRay, exact_child_boxes};
 use super::packet::{LANES, TrianglePacket};
+use super::triangle::RayShear;
 
 /// Capacity of the traversal stack, in nodes (a power of two).
 const STACK: usize = 128;
@@ -213,7 +215,9 @@ impl FlatBvh {
 
     /// Traces `ray`, box tests by `boxes`: without `ANY` the closest hit
     /// with `t` in `[t_min, t_max]` (lowering `ray.t_max` to it), with `ANY`
-    /// the first hit found.
+    /// the first hit found. With `ANY` the walk sets `ray.shear` itself
+    /// before each packet test, so `ray` may come
+    /// [`TraceRay::without_shear`].
     #[inline(always)]
     #[allow(unsafe_code)]
     pub fn trace<const ANY: bool>(
@@ -258,6 +262,10 @@ impl FlatBvh {
                     continue;
                 }
                 let lanes = packet.lanes_of(hit_children);
+                if ANY {
+                    // Occlusion rays come without it (`TraceRay::without_shear`).
+                    ray.shear = RayShear::new(ray.dir);
+                }
                 let Some(hit) = boxes.packet_hit(packet, ray, lanes) else {
                     continue;
                 };
@@ -377,7 +385,8 @@ mod tests {
     /// The flat walk finds the closest hit of brute force over the same
     /// triangles and of obvhs's own traversal of the CWBVH it was converted
     /// from (same `t`; the same triangle and barycentrics unless two are hit
-    /// at exactly that `t`), and occlusion agrees with the closest hit.
+    /// at exactly that `t`), and occlusion agrees with the closest hit, for
+    /// rays made with and without the shear.
     #[test]
     fn flat_walk_matches_obvhs_walk_and_brute_force() {
         let mut rng = Rng::new(5);
@@ -420,6 +429,12 @@ mod tests {
             }
             let occluded = flat.trace::<true>(&mut ray.clone(), Portable);
             assert_eq!(occluded.is_some(), found.is_some(), "ray {i}");
+            // Occlusion walks set the shear of rays made without it; a
+            // closest-hit walk of such a ray finds nothing.
+            let unsheared = TraceRay::without_shear(ray.origin, ray.dir, ray.t_min, ray.t_max);
+            let occluded = flat.trace::<true>(&mut unsheared.clone(), Portable);
+            assert_eq!(occluded.is_some(), found.is_some(), "ray {i}");
+            assert_eq!(flat.trace::<false>(&mut unsheared.clone(), Portable), None);
             hits += usize::from(found.is_some());
         }
         assert!(

@@ -401,7 +401,7 @@ impl Accel {
     /// (whose barycentrics are then meaningless).
     #[inline(always)]
     fn trace<const ANY: bool>(&self, ray: &Ray, boxes: impl BoxTest) -> Option<Hit> {
-        let mut world = TraceRay::new(
+        let mut world = TraceRay::for_walk::<ANY>(
             Vec3A::from(ray.origin),
             Vec3A::from(ray.dir),
             ray.t_min,
@@ -462,7 +462,7 @@ impl Accel {
                 let flat = match instance.traced {
                     Traced::Blas(blas) => {
                         let to_object = &placement.object_from_world;
-                        let mut local = TraceRay::new(
+                        let mut local = TraceRay::for_walk::<ANY>(
                             to_object.transform_point3a(world.origin),
                             to_object.transform_vector3a(world.dir),
                             world.t_min,
@@ -601,7 +601,8 @@ fn hit(found: Found<'_>, best: Option<FlatHit>) -> Option<Hit> {
 
 /// The hit of the world-space ray `origin + t·dir` on the exact unit sphere
 /// placed by `placement`, with `t` in `[t_min, t_max]` (mapped to object
-/// space in `f32`, solved in `f64`), its local coordinates octahedral
+/// space in `f32`, solved in `f64`, unless the placement's world-space
+/// [`sphere::MissTest`] rules it out first), its local coordinates octahedral
 /// ([`sphere`]; with `ANY`, which asks only whether there is a hit, zero).
 #[inline(always)]
 fn placed_sphere_hit<const ANY: bool>(
@@ -611,10 +612,10 @@ fn placed_sphere_hit<const ANY: bool>(
     t_min: f32,
     t_max: f32,
 ) -> Option<FlatHit> {
-    let to_object = &placement.object_from_world;
-    let o = to_object.transform_point3a(origin).as_dvec3();
-    let d = to_object.transform_vector3a(dir).as_dvec3();
-    let t = sphere::intersect(o, d, f64::from(t_min), f64::from(t_max))?;
+    if placement.sphere.misses(origin, dir) {
+        return None;
+    }
+    let (o, d, t) = exact_sphere_hit(placement, origin, dir, t_min, t_max)?;
     let [b1, b2] = if ANY {
         [0.0; 2]
     } else {
@@ -626,6 +627,24 @@ fn placed_sphere_hit<const ANY: bool>(
         b1: b1 as f32,
         b2: b2 as f32,
     })
+}
+
+/// The ray `origin + t·dir` mapped to the object space of the unit sphere
+/// placed by `placement` (in `f32`, then widened) and its first `t` in
+/// `[t_min, t_max]` there (solved in `f64`), without the miss test.
+#[inline(always)]
+fn exact_sphere_hit(
+    placement: &hit::Placement,
+    origin: Vec3A,
+    dir: Vec3A,
+    t_min: f32,
+    t_max: f32,
+) -> Option<(DVec3, DVec3, f64)> {
+    let to_object = &placement.object_from_world;
+    let o = to_object.transform_point3a(origin).as_dvec3();
+    let d = to_object.transform_vector3a(dir).as_dvec3();
+    let t = sphere::intersect(o, d, f64::from(t_min), f64::from(t_max))?;
+    Some((o, d, t))
 }
 
 /// Object-space bounds of the hittable triangles of `mesh` (empty without).
@@ -774,5 +793,95 @@ mod tests {
             occluded += usize::from(any);
         }
         assert!(hits > 2000 && occluded == hits, "{hits} hits");
+    }
+
+    /// A random placement of the unit sphere: a rotation, a scale (uniform,
+    /// 0.003 to 10, or per axis up to 25 : 1 with some axes mirrored) and a
+    /// translation of up to `reach` per axis.
+    fn sphere_placement(rng: &mut Rng, uniform: bool, reach: f64) -> DAffine3 {
+        let scale = if uniform {
+            DVec3::splat(10f64.powf(rng.range(-2.5, 1.0)))
+        } else {
+            rng.dvec3(0.2, 5.0) * DVec3::new(1.0, if rng.below(3) == 0 { -1.0 } else { 1.0 }, 1.0)
+        };
+        DAffine3::from_scale_rotation_translation(
+            scale,
+            DQuat::from_axis_angle(rng.unit(), rng.range(0.0, 6.3)),
+            rng.dvec3(-reach, reach),
+        )
+    }
+
+    /// A world-space ray whose line passes at object-space distance
+    /// `1 + gap` from the centre of the sphere placed by `w`, its origin
+    /// `back` units (object space) before the closest point, and its
+    /// direction of random length.
+    fn ray_at_distance(rng: &mut Rng, w: &DAffine3, gap: f64, back: f64) -> (Vec3A, Vec3A) {
+        let q = rng.unit();
+        let u = q.cross(rng.unit()).normalize();
+        let origin = w.transform_point3(q * (1.0 + gap) - u * back);
+        let dir = w.transform_vector3(u) * rng.range(0.1, 10.0);
+        (origin.as_vec3a(), dir.as_vec3a())
+    }
+
+    /// The miss test of a placed sphere never rejects a ray the exact test
+    /// (the ray mapped to object space in `f32`, solved in `f64`) hits:
+    /// rays grazing the surface (in or out by 10⁻⁸ to 1 % of the radius,
+    /// where the `f32` mapping decides) from near and far (up to 10⁴
+    /// object-space units), on uniform and skewed, mirrored placements up to
+    /// 10³ from the origin, and random rays.
+    #[test]
+    fn sphere_miss_test_never_rejects_a_hit() {
+        let mut rng = Rng::new(41);
+        let (mut grazing_hits, mut rejected) = (0, 0);
+        for i in 0..400 {
+            let w = sphere_placement(&mut rng, i % 2 == 0, if i % 4 < 2 { 1e3 } else { 2.0 });
+            let placement = hit::Placement::new(&w).expect("invertible");
+            for j in 0..200 {
+                let (origin, dir) = if j % 4 == 0 {
+                    let origin = w.translation + rng.dvec3(-8.0, 8.0) * w.matrix3.x_axis.length();
+                    (origin.as_vec3a(), rng.unit().as_vec3a())
+                } else {
+                    let sign = if rng.below(2) == 0 { -1.0 } else { 1.0 };
+                    let gap = sign * 10f64.powf(rng.range(-8.0, -2.0));
+                    let back = 10f64.powf(rng.range(-1.0, 4.0));
+                    ray_at_distance(&mut rng, &w, gap, back)
+                };
+                let exact = exact_sphere_hit(&placement, origin, dir, 0.0, f32::INFINITY).is_some();
+                let misses = placement.sphere.misses(origin, dir);
+                assert!(!(exact && misses), "{w:?}: {origin} {dir}");
+                grazing_hits += usize::from(exact && j % 4 != 0);
+                rejected += usize::from(misses);
+            }
+        }
+        assert!(
+            grazing_hits > 10_000 && rejected > 5_000,
+            "{grazing_hits} grazing hits, {rejected} rejected"
+        );
+    }
+
+    /// On rotated, uniformly scaled spheres near the origin (within 1 per
+    /// axis), the miss test
+    /// rejects every ray that passes 1 % of the radius or more outside,
+    /// from up to ten radii away; the identity's test is
+    /// [`MissTest::UNIT`](sphere::MissTest::UNIT).
+    #[test]
+    fn sphere_miss_test_rejects_clear_misses() {
+        let mut rng = Rng::new(43);
+        for _ in 0..200 {
+            let w = sphere_placement(&mut rng, true, 1.0);
+            let placement = hit::Placement::new(&w).expect("invertible");
+            for _ in 0..200 {
+                let (gap, back) = (10f64.powf(rng.range(-2.0, 1.0)), rng.range(0.0, 10.0));
+                let (origin, dir) = ray_at_distance(&mut rng, &w, gap, back);
+                assert!(
+                    placement.sphere.misses(origin, dir),
+                    "{w:?}: {origin} {dir}"
+                );
+            }
+        }
+        assert_eq!(
+            sphere::MissTest::new(&DAffine3::IDENTITY),
+            sphere::MissTest::UNIT
+        );
     }
 }

@@ -52,14 +52,22 @@ const EXIT_SCALE: f32 = 1.0 + 4.0 * f32::EPSILON;
 const TINY_DIR: f32 = 1e-18;
 
 /// A ray prepared for box tests: origin, direction, clamped reciprocal
-/// direction and `t` range.
+/// direction and `t` range, and the shear of the watertight triangle test.
+///
+/// An occlusion walk ([`FlatBvh::trace`](super::flat::FlatBvh) with `ANY`)
+/// computes the shear itself before each packet test, so occlusion rays are
+/// made [`TraceRay::without_shear`]: shadow rays rarely reach a packet (0.06
+/// packet tests per shadow ray on `scenes/caustic-box.toml`, session 11), and
+/// the shear's division and its store and indexed reload of the direction
+/// then cost every shadow ray for nothing (docs/performance.md, session 22).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct TraceRay {
     /// Origin.
     pub origin: Vec3A,
     /// Direction (not normalised; not clamped).
     pub dir: Vec3A,
-    /// Constants of the watertight triangle test.
+    /// Constants of the watertight triangle test ([`RayShear::UNSET`] on a
+    /// ray made [`TraceRay::without_shear`] until a walk sets them).
     pub shear: RayShear,
     /// Reciprocals of the clamped direction components.
     inv_dir: Vec3A,
@@ -73,17 +81,40 @@ impl TraceRay {
     /// Prepares `origin + t·dir`, `t` in `[t_min, t_max]`.
     #[inline(always)]
     pub fn new(origin: Vec3A, dir: Vec3A, t_min: f32, t_max: f32) -> Self {
-        // Branch-free: a per-ray branch on the octant mispredicts.
-        let neg = dir.cmplt(Vec3A::ZERO);
-        let tiny = Vec3A::select(neg, Vec3A::splat(-TINY_DIR), Vec3A::splat(TINY_DIR));
-        let safe = Vec3A::select(dir.abs().cmpge(Vec3A::splat(TINY_DIR)), dir, tiny);
+        let inv_dir = clamped_recip(dir);
         Self {
             origin,
             dir,
             shear: RayShear::new(dir),
-            inv_dir: safe.recip(),
+            inv_dir,
             t_min,
             t_max,
+        }
+    }
+
+    /// [`TraceRay::new`] without the triangle test's shear, for occlusion
+    /// walks only (which set it before each packet test). Its packet tests
+    /// would find no hit: [`RayShear::UNSET`] makes every edge function NaN.
+    #[inline(always)]
+    pub fn without_shear(origin: Vec3A, dir: Vec3A, t_min: f32, t_max: f32) -> Self {
+        Self {
+            origin,
+            dir,
+            shear: RayShear::UNSET,
+            inv_dir: clamped_recip(dir),
+            t_min,
+            t_max,
+        }
+    }
+
+    /// The ray for a walk with `ANY`: [`TraceRay::without_shear`] for an
+    /// occlusion walk, else [`TraceRay::new`].
+    #[inline(always)]
+    pub fn for_walk<const ANY: bool>(origin: Vec3A, dir: Vec3A, t_min: f32, t_max: f32) -> Self {
+        if ANY {
+            Self::without_shear(origin, dir, t_min, t_max)
+        } else {
+            Self::new(origin, dir, t_min, t_max)
         }
     }
 
@@ -97,6 +128,17 @@ impl TraceRay {
         let bits = self.dir.cmplt(Vec3A::ZERO).bitmask();
         OCT_INV4[(!bits & 7) as usize]
     }
+}
+
+/// The reciprocals of `dir`'s components, each clamped to at least
+/// [`TINY_DIR`] in magnitude first (with the sign of the octant test
+/// `dir < 0`), for the slab tests.
+#[inline(always)]
+fn clamped_recip(dir: Vec3A) -> Vec3A {
+    // Branch-free: a per-ray branch on the octant mispredicts.
+    let neg = dir.cmplt(Vec3A::ZERO);
+    let tiny = Vec3A::select(neg, Vec3A::splat(-TINY_DIR), Vec3A::splat(TINY_DIR));
+    Vec3A::select(dir.abs().cmpge(Vec3A::splat(TINY_DIR)), dir, tiny).recip()
 }
 
 /// obvhs's `ray_get_octant_inv4` by the mask of positive direction

@@ -36,6 +36,13 @@ pub(crate) struct RayShear {
 }
 
 impl RayShear {
+    /// No shear: a triangle test with it computes NaN edge functions and
+    /// finds nothing ([`TraceRay::without_shear`](super::node::TraceRay)).
+    pub const UNSET: Self = Self {
+        axes: [0, 1, 2],
+        kz_col: [f32::NAN; 3],
+    };
+
     /// The shear of direction `dir` (a zero direction gives non-finite
     /// constants, and then no hits).
     #[inline(always)]
