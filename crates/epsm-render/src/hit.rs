@@ -19,7 +19,11 @@
 use glam::{Affine3A, DAffine3, DMat3, DVec3, Mat3A, Vec2, Vec3};
 
 use crate::frame::Frame;
+#[cfg(target_arch = "x86_64")]
+use crate::frame::Frames16;
 use crate::scene::{Mesh, Object, ObjectId};
+#[cfg(target_arch = "x86_64")]
+use crate::simd::{Avx512, F32x16, LANES, Mask16, U32x16, Vec3x16};
 use crate::sphere::MissTest;
 
 /// A ray hit as the BVH reports it.
@@ -352,4 +356,139 @@ pub fn intersect_triangle_f64(
         b2: dir.dot(qvec) * inv,
     };
     (hit.t.is_finite() && hit.b1.is_finite() && hit.b2.is_finite()).then_some(hit)
+}
+
+/// Sixteen [`Hit`]s, one per lane, as the wide walks return them; lanes
+/// outside `found` hold no hit (their other fields are unspecified).
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Hits16 {
+    /// Lanes whose ray hit something.
+    pub found: Mask16,
+    /// The object hit.
+    pub object: U32x16,
+    /// The triangle hit (0 on an exact sphere).
+    pub triangle: U32x16,
+    /// Local coordinates on it (module docs).
+    pub b1: F32x16,
+    /// Local coordinates on it (module docs).
+    pub b2: F32x16,
+    /// Ray parameter, in units of the ray's direction.
+    pub t: F32x16,
+    /// [`Hit`]'s index in the static BVH's shading data.
+    pub world_index: U32x16,
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Hits16 {
+    /// Lane `lane` as a [`Hit`] (`None` outside `found`).
+    #[inline(always)]
+    pub fn lane(&self, lane: usize) -> Option<Hit> {
+        self.found.test(lane).then(|| Hit {
+            object: self.object.lane(lane),
+            triangle: self.triangle.lane(lane),
+            b1: self.b1.lane(lane),
+            b2: self.b2.lane(lane),
+            t: self.t.lane(lane),
+            world_index: self.world_index.lane(lane),
+        })
+    }
+
+    /// The lanes of `hits` (`None`: not found, and zeros).
+    #[inline(always)]
+    pub fn from_lanes(k: Avx512, hits: &[Option<Hit>; LANES]) -> Self {
+        let field =
+            |f: fn(&Hit) -> u32| U32x16::from_array(k, hits.map(|h| h.as_ref().map_or(0, f)));
+        let float =
+            |f: fn(&Hit) -> f32| F32x16::from_array(k, hits.map(|h| h.as_ref().map_or(0.0, f)));
+        let mut found = Mask16::NONE;
+        for (lane, h) in hits.iter().enumerate() {
+            found.0 |= u16::from(h.is_some()) << lane;
+        }
+        Self {
+            found,
+            object: field(|h| h.object),
+            triangle: field(|h| h.triangle),
+            b1: float(|h| h.b1),
+            b2: float(|h| h.b2),
+            t: float(|h| h.t),
+            world_index: field(|h| h.world_index),
+        }
+    }
+}
+
+/// Sixteen [`TexCoords`], one per lane: lanes in `sphere` hold a
+/// [`TexCoords::Sphere`] point in `a`, the others a [`TexCoords::Uv`] in
+/// `a.x`, `a.y`.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct TexCoords16 {
+    /// Lanes on exact spheres.
+    pub sphere: Mask16,
+    /// The coordinates (see the type).
+    pub a: Vec3x16,
+}
+
+#[cfg(target_arch = "x86_64")]
+impl TexCoords16 {
+    /// Lane `lane` as [`TexCoords`].
+    #[inline(always)]
+    pub fn lane(&self, lane: usize) -> TexCoords {
+        let a = self.a.lane(lane);
+        if self.sphere.test(lane) {
+            TexCoords::Sphere(a)
+        } else {
+            TexCoords::Uv(Vec2::new(a.x, a.y))
+        }
+    }
+}
+
+/// Sixteen [`SurfacePoint`]s, one per lane.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct SurfacePoints16 {
+    /// Positions, world space.
+    pub p: Vec3x16,
+    /// Unit geometric normals, world space.
+    pub ng: Vec3x16,
+    /// Texture coordinates.
+    pub uv: TexCoords16,
+    /// Shading frames (`frame.n` the shading normal).
+    pub frame: Frames16,
+}
+
+#[cfg(target_arch = "x86_64")]
+impl SurfacePoints16 {
+    /// The points of `points`, lane `i` from `points[i]`.
+    #[inline(always)]
+    pub fn from_lanes(k: Avx512, points: &[SurfacePoint; LANES]) -> Self {
+        let mut sphere = Mask16::NONE;
+        let a = points.map(|sp| match sp.uv {
+            TexCoords::Uv(uv) => uv.extend(0.0),
+            TexCoords::Sphere(p) => p,
+        });
+        for (lane, sp) in points.iter().enumerate() {
+            sphere.0 |= u16::from(matches!(sp.uv, TexCoords::Sphere(_))) << lane;
+        }
+        Self {
+            p: Vec3x16::from_lanes(k, &points.map(|sp| sp.p)),
+            ng: Vec3x16::from_lanes(k, &points.map(|sp| sp.ng)),
+            uv: TexCoords16 {
+                sphere,
+                a: Vec3x16::from_lanes(k, &a),
+            },
+            frame: Frames16::from_lanes(k, &points.map(|sp| sp.frame)),
+        }
+    }
+
+    /// Lane `lane` as a [`SurfacePoint`].
+    #[inline(always)]
+    pub fn lane(&self, lane: usize) -> SurfacePoint {
+        SurfacePoint {
+            p: self.p.lane(lane),
+            ng: self.ng.lane(lane),
+            uv: self.uv.lane(lane),
+            frame: self.frame.lane(lane),
+        }
+    }
 }

@@ -47,6 +47,8 @@ pub mod ray;
 pub mod record;
 pub mod sampler;
 pub mod scene;
+#[cfg(target_arch = "x86_64")]
+mod simd;
 pub mod sphere;
 pub mod tracer;
 

@@ -2,6 +2,9 @@
 
 use glam::{Vec3, Vec3A};
 
+#[cfg(target_arch = "x86_64")]
+use crate::simd::{Avx512, F32x16, Vec3x16};
+
 /// A ray `origin + t·dir` for `t` in `[t_min, t_max]`. `dir` need not be unit
 /// (instance traversal keeps `t` by transforming an unnormalised direction),
 /// but rays made by the camera and by sampling are unit.
@@ -110,6 +113,60 @@ fn offset_origin_sse2(p: Vec3, ng: Vec3) -> Vec3 {
         near,
         Vec3A::from(moved),
     ))
+}
+
+/// Sixteen rays, one per lane ([`Ray`]'s fields by lane), for the wide
+/// tracer.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Rays16 {
+    /// Origins.
+    pub origin: Vec3x16,
+    /// Directions (not necessarily unit).
+    pub dir: Vec3x16,
+    /// Start of the `t` ranges.
+    pub t_min: F32x16,
+    /// End of the `t` ranges.
+    pub t_max: F32x16,
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Rays16 {
+    /// Lane `lane` as a [`Ray`].
+    #[inline(always)]
+    pub fn lane(&self, lane: usize) -> Ray {
+        Ray {
+            origin: self.origin.lane(lane),
+            dir: self.dir.lane(lane),
+            t_min: self.t_min.lane(lane),
+            t_max: self.t_max.lane(lane),
+        }
+    }
+}
+
+/// [`offset_origin`] in sixteen lanes: the operations of
+/// [`offset_origin_sse2`] lane by lane, so the same origins bit for bit.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+pub(crate) fn offset_origins16(k: Avx512, p: Vec3x16, ng: Vec3x16) -> Vec3x16 {
+    let (int_scale, float_scale, origin) = (
+        F32x16::splat(k, INT_SCALE),
+        F32x16::splat(k, FLOAT_SCALE),
+        F32x16::splat(k, ORIGIN),
+    );
+    let component = |pc: F32x16, nc: F32x16| {
+        let of_i = (nc * int_scale).trunc_i32();
+        let bits = pc.to_bits();
+        let negative = bits.shr_signed(31);
+        let moved = F32x16::from_bits(bits + ((of_i ^ negative) - negative));
+        let near = pc + float_scale * nc;
+        F32x16::select(pc.abs().lt(origin), near, moved)
+    };
+    Vec3x16::new(
+        component(p.x, ng.x),
+        component(p.y, ng.y),
+        component(p.z, ng.z),
+    )
 }
 
 #[cfg(test)]

@@ -1,0 +1,88 @@
+//! Sixteen lanes at a time: the value types of the wide tracer
+//! (`tracer::wide`), one lane per path, on CPUs with AVX-512.
+//!
+//! | type | lanes | holds |
+//! |---|---|---|
+//! | [`F32x16`] | 16 × `f32` | one `__m512` |
+//! | [`F64x16`] | 16 × `f64` | two `__m512d` (lanes 0–7, 8–15) |
+//! | [`U32x16`] | 16 × `u32` | one `__m512i` |
+//! | [`U64x16`] | 16 × `u64` | two `__m512i` (lanes 0–7, 8–15) |
+//! | [`Mask16`] | 16 × `bool` | one `__mmask16` (bit `i`: lane `i`) |
+//! | [`Vec3x16`] | 16 × [`glam::Vec3`] | three [`F32x16`] |
+//!
+//! Model: every lane operation is the IEEE operation the scalar code does on
+//! one value (no fused multiply–add, no approximate reciprocals), so a lane
+//! computes bit for bit what the scalar tracer computes for its path when
+//! the operations come in the same order. Where Rust's scalar semantics and
+//! the instruction's differ, the method says which it follows: `min` and
+//! `max` are `if a < b { a } else { b }` and `if a > b { a } else { b }`
+//! (the instructions' rule, and glam's `min_element`/`max_element`; Rust's
+//! `f32::min(x, c)` agrees with it for a constant `c` that is not NaN);
+//! comparisons are ordered (false on NaN) except `ne`.
+//!
+//! Soundness: the lane types wrap AVX-512 registers and their methods call
+//! the intrinsics without checking the CPU. A value of any of them can only
+//! be made from an [`Avx512`] token (the constructors take one) or from other
+//! values, and a token exists only on a CPU found to have AVX-512 F, VL, DQ
+//! and BW ([`Avx512::detect`]), so every intrinsic call runs on such a CPU
+//! (the `avx!` macro below states this once for every `unsafe` block). The
+//! methods are `#[inline(always)]` so that they compile into the caller's
+//! `#[target_feature]` function as single instructions.
+
+#![allow(unsafe_code)]
+
+/// Runs an AVX-512 intrinsic expression.
+///
+/// SAFETY (every use): the expression calls AVX-512 F/VL/DQ/BW intrinsics
+/// (and the AVX2 ones they imply) on values of this module's lane types,
+/// which exist only after [`Avx512::detect`] found those features (module
+/// docs); pointer arguments, where an intrinsic takes one, are stated at the
+/// use.
+macro_rules! avx {
+    ($e:expr) => {
+        // SAFETY: see the macro's documentation.
+        unsafe { $e }
+    };
+}
+
+mod f32x16;
+mod f64x16;
+mod u32x16;
+mod u64x16;
+mod vec3;
+
+#[cfg(test)]
+mod tests;
+
+pub(crate) use f32x16::{F32x16, Mask16};
+pub(crate) use f64x16::F64x16;
+pub(crate) use u32x16::U32x16;
+pub(crate) use u64x16::U64x16;
+pub(crate) use vec3::Vec3x16;
+
+/// Lanes per vector.
+pub(crate) const LANES: usize = 16;
+
+/// Proof that the CPU has AVX-512 F, VL, DQ and BW, and with them AVX2,
+/// BMI1, BMI2, LZCNT and POPCNT: code compiled with
+/// `#[target_feature(enable = "avx512f,avx512vl,avx512dq,avx512bw,avx2,bmi1,bmi2,lzcnt,popcnt")]`
+/// may run while one is held, and it makes the lane types' constants.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Avx512(());
+
+impl Avx512 {
+    /// The token, when the CPU has every feature it stands for.
+    pub fn detect() -> Option<Self> {
+        use std::arch::is_x86_feature_detected as has;
+        (has!("avx512f")
+            && has!("avx512vl")
+            && has!("avx512dq")
+            && has!("avx512bw")
+            && has!("avx2")
+            && has!("bmi1")
+            && has!("bmi2")
+            && has!("lzcnt")
+            && has!("popcnt"))
+        .then_some(Self(()))
+    }
+}

@@ -1,0 +1,95 @@
+//! Sixteen `u64` lanes in two registers (wrapping arithmetic, as
+//! `u64::wrapping_*`), for the sampler's 64-bit hashes.
+
+use std::arch::x86_64::*;
+use std::ops::{Add, BitXor, Mul, Shr};
+
+use super::{Avx512, LANES, U32x16};
+
+/// Sixteen `u64` lanes: lanes 0–7 in the first register, 8–15 in the
+/// second (module docs of `simd`).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct U64x16(pub(super) [__m512i; 2]);
+
+macro_rules! binary {
+    ($trait:ident, $method:ident, $intrinsic:ident) => {
+        impl $trait for U64x16 {
+            type Output = Self;
+            #[inline(always)]
+            fn $method(self, o: Self) -> Self {
+                Self([
+                    avx!($intrinsic(self.0[0], o.0[0])),
+                    avx!($intrinsic(self.0[1], o.0[1])),
+                ])
+            }
+        }
+    };
+}
+
+binary!(Add, add, _mm512_add_epi64);
+binary!(Mul, mul, _mm512_mullo_epi64);
+binary!(BitXor, bitxor, _mm512_xor_si512);
+
+impl Shr<u32> for U64x16 {
+    type Output = Self;
+    /// Logical shift right of every lane by `n` (`≥ 64` gives 0).
+    #[inline(always)]
+    fn shr(self, n: u32) -> Self {
+        let n = avx!(_mm512_set1_epi64(i64::from(n)));
+        Self([
+            avx!(_mm512_srlv_epi64(self.0[0], n)),
+            avx!(_mm512_srlv_epi64(self.0[1], n)),
+        ])
+    }
+}
+
+impl U64x16 {
+    /// Every lane `x`.
+    #[inline(always)]
+    pub fn splat(_: Avx512, x: u64) -> Self {
+        let v = avx!(_mm512_set1_epi64(x as i64));
+        Self([v, v])
+    }
+
+    /// Lane `i` is `lanes[i]`.
+    #[inline(always)]
+    pub fn from_array(_: Avx512, lanes: [u64; LANES]) -> Self {
+        // Each `loadu` reads eight of the sixteen `u64` of `lanes`.
+        Self([
+            avx!(_mm512_loadu_si512(lanes.as_ptr().cast())),
+            avx!(_mm512_loadu_si512(lanes[8..].as_ptr().cast())),
+        ])
+    }
+
+    /// The lanes as an array.
+    #[inline(always)]
+    pub fn to_array(self) -> [u64; LANES] {
+        let mut out = [0; LANES];
+        // Each `storeu` writes eight of the sixteen `u64` of `out`.
+        avx!(_mm512_storeu_si512(out.as_mut_ptr().cast(), self.0[0]));
+        avx!(_mm512_storeu_si512(out[8..].as_mut_ptr().cast(), self.0[1]));
+        out
+    }
+
+    /// Each lane of `u` zero-extended.
+    #[inline(always)]
+    pub fn from_u32(u: U32x16) -> Self {
+        Self([
+            avx!(_mm512_cvtepu32_epi64(_mm512_castsi512_si256(u.0))),
+            avx!(_mm512_cvtepu32_epi64(_mm512_extracti64x4_epi64::<1>(u.0))),
+        ])
+    }
+
+    /// The low 32 bits of each lane (`as u32`).
+    #[inline(always)]
+    pub fn low_u32(self) -> U32x16 {
+        let (lo, hi) = (
+            avx!(_mm512_cvtepi64_epi32(self.0[0])),
+            avx!(_mm512_cvtepi64_epi32(self.0[1])),
+        );
+        U32x16(avx!(_mm512_inserti64x4::<1>(
+            _mm512_castsi256_si512(lo),
+            hi
+        )))
+    }
+}
