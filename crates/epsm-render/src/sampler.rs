@@ -48,6 +48,8 @@ use glam::Vec2;
 
 #[cfg(target_arch = "x86_64")]
 mod avx2;
+#[cfg(target_arch = "x86_64")]
+pub(crate) mod wide;
 
 /// The sample-independent part of one pixel's streams (its stratified
 /// dimensions' permutation keys and the stratum count), computed once and
