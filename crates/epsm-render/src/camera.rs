@@ -20,10 +20,6 @@
 use glam::{DMat3, DVec2, DVec3, Vec2, Vec3};
 
 use crate::Ray;
-#[cfg(target_arch = "x86_64")]
-use crate::ray::Rays16;
-#[cfg(target_arch = "x86_64")]
-use crate::simd::{Avx512, F32x16, Vec3x16};
 
 /// A perspective camera. Geometry is kept in `f64` (it is differentiated);
 /// ray generation uses a cached `f32` basis.
@@ -176,25 +172,6 @@ impl FilmRays {
         let sy = (1.0 - 2.0 * film.y / self.size.y) * self.th;
         let dir = self.forward + self.right * sx + self.up * sy;
         Ray::new(self.origin, dir.normalize())
-    }
-
-    /// [`FilmRays::ray`] in every lane (the same operations, so the same
-    /// rays bit for bit); `film` holds the lanes' film positions' `x` and
-    /// `y`.
-    #[cfg(target_arch = "x86_64")]
-    #[inline(always)]
-    pub(crate) fn rays16(&self, k: Avx512, film: [F32x16; 2]) -> Rays16 {
-        let s = |x: f32| F32x16::splat(k, x);
-        let sx = (s(2.0) * film[0] / s(self.size.x) - s(1.0)) * s(self.th_aspect);
-        let sy = (s(1.0) - s(2.0) * film[1] / s(self.size.y)) * s(self.th);
-        let v = |v: Vec3| Vec3x16::splat(k, v);
-        let dir = v(self.forward) + v(self.right) * sx + v(self.up) * sy;
-        Rays16 {
-            origin: v(self.origin),
-            dir: dir.normalize(k),
-            t_min: s(0.0),
-            t_max: s(f32::INFINITY),
-        }
     }
 }
 

@@ -397,22 +397,25 @@ impl Hits16 {
     /// The lanes of `hits` (`None`: not found, and zeros).
     #[inline(always)]
     pub fn from_lanes(k: Avx512, hits: &[Option<Hit>; LANES]) -> Self {
-        let field =
-            |f: fn(&Hit) -> u32| U32x16::from_array(k, hits.map(|h| h.as_ref().map_or(0, f)));
-        let float =
-            |f: fn(&Hit) -> f32| F32x16::from_array(k, hits.map(|h| h.as_ref().map_or(0.0, f)));
         let mut found = Mask16::NONE;
+        let (mut object, mut triangle, mut world_index) = ([0; LANES], [0; LANES], [0; LANES]);
+        let (mut b1, mut b2, mut t) = ([0.0; LANES], [0.0; LANES], [0.0; LANES]);
         for (lane, h) in hits.iter().enumerate() {
-            found.0 |= u16::from(h.is_some()) << lane;
+            if let Some(h) = h {
+                found.0 |= 1 << lane;
+                (object[lane], triangle[lane], world_index[lane]) =
+                    (h.object, h.triangle, h.world_index);
+                (b1[lane], b2[lane], t[lane]) = (h.b1, h.b2, h.t);
+            }
         }
         Self {
             found,
-            object: field(|h| h.object),
-            triangle: field(|h| h.triangle),
-            b1: float(|h| h.b1),
-            b2: float(|h| h.b2),
-            t: float(|h| h.t),
-            world_index: field(|h| h.world_index),
+            object: U32x16::from_array(k, object),
+            triangle: U32x16::from_array(k, triangle),
+            b1: F32x16::from_array(k, b1),
+            b2: F32x16::from_array(k, b2),
+            t: F32x16::from_array(k, t),
+            world_index: U32x16::from_array(k, world_index),
         }
     }
 }

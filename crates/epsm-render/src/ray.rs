@@ -149,24 +149,23 @@ impl Rays16 {
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
 pub(crate) fn offset_origins16(k: Avx512, p: Vec3x16, ng: Vec3x16) -> Vec3x16 {
-    let (int_scale, float_scale, origin) = (
-        F32x16::splat(k, INT_SCALE),
-        F32x16::splat(k, FLOAT_SCALE),
-        F32x16::splat(k, ORIGIN),
-    );
-    let component = |pc: F32x16, nc: F32x16| {
-        let of_i = (nc * int_scale).trunc_i32();
-        let bits = pc.to_bits();
-        let negative = bits.shr_signed(31);
-        let moved = F32x16::from_bits(bits + ((of_i ^ negative) - negative));
-        let near = pc + float_scale * nc;
-        F32x16::select(pc.abs().lt(origin), near, moved)
-    };
     Vec3x16::new(
-        component(p.x, ng.x),
-        component(p.y, ng.y),
-        component(p.z, ng.z),
+        offset_components16(k, p.x, ng.x),
+        offset_components16(k, p.y, ng.y),
+        offset_components16(k, p.z, ng.z),
     )
+}
+
+/// One coordinate of [`offset_origins16`].
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn offset_components16(k: Avx512, pc: F32x16, nc: F32x16) -> F32x16 {
+    let of_i = (nc * k.f32(INT_SCALE)).trunc_i32();
+    let bits = pc.to_bits();
+    let negative = bits.shr_signed(31);
+    let moved = F32x16::from_bits(bits + ((of_i ^ negative) - negative));
+    let near = pc + k.f32(FLOAT_SCALE) * nc;
+    F32x16::select(pc.abs().lt(k.f32(ORIGIN)), near, moved)
 }
 
 #[cfg(test)]
@@ -213,6 +212,43 @@ mod tests {
                 assert_eq!(
                     offset_origin(p, n).to_array().map(f32::to_bits),
                     expected.to_array().map(f32::to_bits)
+                );
+            }
+        }
+    }
+
+    /// The lanes' offsets are the scalar offsets, bit for bit.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn lane_offsets_are_the_scalar_offsets() {
+        let Some(k) = crate::simd::Avx512::detect() else {
+            eprintln!("no AVX-512 on this CPU: nothing to test");
+            return;
+        };
+        let mut state = 0x2545_F491_4F6C_DD1Du64;
+        let mut uniform = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        };
+        for round in 0..2000 {
+            let scale = [1e-3, 0.02, 1.0, 1e3, 1e6][round % 5];
+            let p: [Vec3; 16] = std::array::from_fn(|i| {
+                let v = (Vec3::new(uniform(), uniform(), uniform()) - 0.5) * 2.0 * scale;
+                if i == 3 { Vec3::new(-0.0, 0.0, v.z) } else { v }
+            });
+            let n: [Vec3; 16] = std::array::from_fn(|_| {
+                (Vec3::new(uniform(), uniform(), uniform()) - 0.5).normalize_or_zero()
+            });
+            let got = offset_origins16(k, Vec3x16::from_lanes(k, &p), Vec3x16::from_lanes(k, &n));
+            for lane in 0..16 {
+                assert_eq!(
+                    got.lane(lane).to_array().map(f32::to_bits),
+                    offset_origin(p[lane], n[lane]).to_array().map(f32::to_bits),
+                    "p {} n {}",
+                    p[lane],
+                    n[lane]
                 );
             }
         }

@@ -28,6 +28,15 @@
 //! (the `avx!` macro below states this once for every `unsafe` block). The
 //! methods are `#[inline(always)]` so that they compile into the caller's
 //! `#[target_feature]` function as single instructions.
+//!
+//! Inlining: an intrinsic inlines only into a function compiled with its
+//! features, and a closure is compiled as a function of its own, without
+//! them. Lane code called from a closure (a `let` closure, or one passed to
+//! `array::from_fn` or `map`) therefore stays a call per operation unless
+//! the closure is `#[inline(always)]` (allowed on closures passed as
+//! arguments, not on `let` ones): wide code uses plain loops, nested
+//! `#[inline(always)]` functions, and the token's constant makers
+//! ([`Avx512::f32`] and the like) instead.
 
 #![allow(unsafe_code)]
 
@@ -71,6 +80,36 @@ pub(crate) const LANES: usize = 16;
 pub(crate) struct Avx512(());
 
 impl Avx512 {
+    /// Every lane `x` ([`F32x16::splat`]).
+    #[inline(always)]
+    pub fn f32(self, x: f32) -> F32x16 {
+        F32x16::splat(self, x)
+    }
+
+    /// Every lane `x` ([`F64x16::splat`]).
+    #[inline(always)]
+    pub fn f64(self, x: f64) -> F64x16 {
+        F64x16::splat(self, x)
+    }
+
+    /// Every lane `x` ([`U32x16::splat`]).
+    #[inline(always)]
+    pub fn u32(self, x: u32) -> U32x16 {
+        U32x16::splat(self, x)
+    }
+
+    /// Every lane `x` ([`U64x16::splat`]).
+    #[inline(always)]
+    pub fn u64(self, x: u64) -> U64x16 {
+        U64x16::splat(self, x)
+    }
+
+    /// Every lane `v` ([`Vec3x16::splat`]).
+    #[inline(always)]
+    pub fn vec3(self, v: glam::Vec3) -> Vec3x16 {
+        Vec3x16::splat(self, v)
+    }
+
     /// The token, when the CPU has every feature it stands for.
     pub fn detect() -> Option<Self> {
         use std::arch::is_x86_feature_detected as has;

@@ -49,7 +49,7 @@ pub(super) struct Paths16 {
 fn mis(k: Avx512, a: F32x16, b: F32x16) -> F32x16 {
     let (a2, b2) = (a * a, b * b);
     let sum = a2 + b2;
-    let zero = F32x16::splat(k, 0.0);
+    let zero = k.f32(0.0);
     F32x16::select(sum.gt(zero), a2 / sum, zero)
 }
 
@@ -70,14 +70,13 @@ pub(super) fn bounce(
 ) -> Mask16 {
     let scene = setup.scene;
     let (accel, lights) = (scene.accel(), scene.lights());
-    let s = |x: f32| F32x16::splat(k, x);
-    let u = |x: u32| U32x16::splat(k, x);
-    let zero = s(0.0);
+    let zero = k.f32(0.0);
     let active = paths.active;
     let depth = paths.depth;
-    let scatters = active & depth.lt(u(setup.opts.max_depth));
-    let first = u(DIM_FIRST_BOUNCE) + depth * u(DIMS_PER_BOUNCE);
-    let numbers: Block16 = setup.keys.block16(k, &paths.streams, first, active);
+    let scatters = active & depth.lt(k.u32(setup.opts.max_depth));
+    let first = k.u32(DIM_FIRST_BOUNCE) + depth * k.u32(DIMS_PER_BOUNCE);
+    let first_bounce = depth.eq(k.u32(0));
+    let numbers: Block16 = paths.streams.block16(k, first, first_bounce);
     counters.rays += u64::from(active.count());
 
     // Find the next vertex; rays that leave see the background.
@@ -92,9 +91,9 @@ pub(super) fn bounce(
             let weighted = paths.has_prev & lit;
             let w = if weighted.any() {
                 let pdf = pdf_background16(lights, k, dir, weighted);
-                F32x16::select(paths.has_prev, mis(k, paths.prev_pdf, pdf), s(1.0))
+                F32x16::select(paths.has_prev, mis(k, paths.prev_pdf, pdf), k.f32(1.0))
             } else {
-                s(1.0)
+                k.f32(1.0)
             };
             paths.radiance = add_where(lit, paths.radiance, paths.beta * le * w);
         }
@@ -104,14 +103,14 @@ pub(super) fn bounce(
     }
     let sp = surface_points16(accel, k, scene.objects(), &hits);
     let objects: &Objects16 = &setup.objects;
-    let material = U32x16::gather(&objects.material, hits.object, hit, u(0));
+    let material = U32x16::gather(&objects.material, hits.object, hit, k.u32(0));
     let wi_world = -paths.ray.dir;
     let wi_ng = wi_world.dot(sp.ng);
-    let mut contribution = Vec3x16::splat(k, glam::Vec3::ZERO);
+    let mut contribution = k.vec3(glam::Vec3::ZERO);
 
     // Emission hit by BSDF sampling (front face only).
-    let emitter = U32x16::gather(&objects.emitter, hits.object, hit, u(0));
-    let emits = hit.and_not(emitter.eq(u(0))) & wi_ng.gt(zero);
+    let emitter = U32x16::gather(&objects.emitter, hits.object, hit, k.u32(0));
+    let emits = hit.and_not(emitter.eq(k.u32(0))) & wi_ng.gt(zero);
     if emits.any() {
         let le = Vec3x16::new(
             F32x16::gather(&objects.emission[0], hits.object, emits, zero),
@@ -130,9 +129,9 @@ pub(super) fn bounce(
                 sp.ng,
                 weighted,
             );
-            F32x16::select(weighted, mis(k, paths.prev_pdf, pdf), s(1.0))
+            F32x16::select(weighted, mis(k, paths.prev_pdf, pdf), k.f32(1.0))
         } else {
-            s(1.0)
+            k.f32(1.0)
         };
         contribution = add_where(emits, contribution, paths.beta * le * w);
     }
@@ -165,7 +164,7 @@ pub(super) fn bounce(
     // lanes it does not reach, and added to every hit lane's contribution,
     // as in the scalar loop).
     let nee = (scatters & hit).and_not(materials.is_delta16(material, scatters & hit));
-    let mut nee_contribution = Vec3x16::splat(k, glam::Vec3::ZERO);
+    let mut nee_contribution = k.vec3(glam::Vec3::ZERO);
     if nee.any() {
         let ls = light_sample16(
             lights,
@@ -185,9 +184,9 @@ pub(super) fn bounce(
             let mis_lanes = lit.and_not(ls.delta);
             let w = if mis_lanes.any() {
                 let pdf = materials.pdf16(k, material, wi, wo, mis_lanes);
-                F32x16::select(ls.delta, s(1.0), mis(k, ls.pdf, pdf))
+                F32x16::select(ls.delta, k.f32(1.0), mis(k, ls.pdf, pdf))
             } else {
-                s(1.0)
+                k.f32(1.0)
             };
             let unoccluded = paths.beta * f * ls.radiance * (w / ls.pdf);
             let origin = offset_origins16(k, sp.p, Vec3x16::select(lwo_ng.ge(zero), sp.ng, -sp.ng));
@@ -196,7 +195,7 @@ pub(super) fn bounce(
                 origin,
                 dir: Vec3x16::select(finite, ls.position - origin, ls.wo),
                 t_min: zero,
-                t_max: F32x16::select(finite, s(1.0 - SHADOW_EPS), s(f32::INFINITY)),
+                t_max: F32x16::select(finite, k.f32(1.0 - SHADOW_EPS), k.f32(f32::INFINITY)),
             };
             counters.shadow_rays += u64::from(lit.count());
             let blocked = occluded16(accel, &shadow, lit);
@@ -222,19 +221,19 @@ pub(super) fn bounce(
         origin: Vec3x16::select(next, origin, paths.ray.origin),
         dir: Vec3x16::select(next, wo_world, paths.ray.dir),
         t_min: zero,
-        t_max: s(f32::INFINITY),
+        t_max: k.f32(f32::INFINITY),
     };
 
     // Russian roulette on the throughput with radiance scaling undone.
-    let roulette = next & (depth + u(1)).ge(u(setup.opts.rr_depth));
-    let q = (beta.max_element() * eta_scale).min(s(0.95));
+    let roulette = next & (depth + k.u32(1)).ge(k.u32(setup.opts.rr_depth));
+    let q = (beta.max_element() * eta_scale).min(k.f32(0.95));
     let killed = roulette & (q.le(zero) | numbers.get_1d(DIM_ROULETTE).ge(q));
     let survives = roulette.and_not(killed);
     let beta = Vec3x16::select(survives, beta.div(q), beta);
     let black = next & beta.is_zero(k);
     paths.beta = beta;
     paths.eta_scale = eta_scale;
-    paths.depth = depth + u(1);
+    paths.depth = depth + k.u32(1);
     let continues = next.and_not(killed).and_not(black);
     active.and_not(continues)
 }

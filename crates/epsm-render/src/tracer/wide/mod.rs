@@ -23,15 +23,19 @@ mod shims;
 
 use glam::{UVec2, Vec3};
 
-use super::{RenderOptions, TILE, TileOutput};
+use super::{DIM_FIRST_BOUNCE, DIMS_PER_BOUNCE, RenderOptions, TILE, TileOutput, camera_sample};
 use crate::ray::Rays16;
-use crate::sampler::wide::{Streams16, TileKeys};
+use crate::sampler::wide::Streams16;
+use crate::sampler::{PixelKeys, STRATIFIED_DIMENSIONS};
 use crate::scene::Scene;
 use crate::simd::{Avx512, F32x16, LANES, Mask16, U32x16, Vec3x16};
 use bounce::{Paths16, bounce};
 
 /// Entries of the ring of finished samples (module docs).
 const RING: usize = 4096;
+
+// A path's first bounce block is its last stratified one (`Streams16`).
+const _: () = assert!(DIM_FIRST_BOUNCE + DIMS_PER_BOUNCE == STRATIFIED_DIMENSIONS);
 
 /// Per-object tables the lanes gather from by object index.
 #[derive(Clone, Debug)]
@@ -69,7 +73,6 @@ struct Setup<'a> {
     scene: &'a Scene,
     opts: &'a RenderOptions,
     objects: &'a Objects16,
-    keys: &'a TileKeys,
 }
 
 /// The wide tracer of one render: the CPU token and the scene's lane
@@ -115,15 +118,15 @@ fn render_tile_avx512(
     let pixels: Vec<UVec2> = (tile.y * TILE..((tile.y + 1) * TILE).min(h))
         .flat_map(|y| (tile.x * TILE..((tile.x + 1) * TILE).min(w)).map(move |x| UVec2::new(x, y)))
         .collect();
-    let keys = TileKeys::new(opts.seed, pixels.iter().map(|p| p.y * w + p.x), opts.spp);
-    let film_x: Vec<f32> = pixels.iter().map(|p| p.x as f32).collect();
-    let film_y: Vec<f32> = pixels.iter().map(|p| p.y as f32).collect();
+    let keys: Vec<PixelKeys> = pixels
+        .iter()
+        .map(|p| PixelKeys::new(opts.seed, p.y * w + p.x, opts.spp))
+        .collect();
     let film_rays = scene.camera().film_rays();
     let setup = Setup {
         scene,
         opts,
         objects,
-        keys: &keys,
     };
     let spp = u64::from(opts.spp);
     let total = pixels.len() as u64 * spp;
@@ -143,7 +146,7 @@ fn render_tile_avx512(
     let zero = F32x16::splat(k, 0.0);
     let mut paths = Paths16 {
         active: Mask16::NONE,
-        streams: Streams16::new(k),
+        streams: Streams16::new(),
         ray: Rays16 {
             origin: zero3,
             dir: zero3,
@@ -159,28 +162,36 @@ fn render_tile_avx512(
         depth: U32x16::splat(k, 0),
     };
     loop {
-        // Free lanes take the next samples, as far as the ring has room.
+        // Free lanes take the next samples, as far as the ring has room;
+        // their streams and camera rays are those of the scalar tile loop.
         let room = (total - next_seq).min(committed + RING as u64 - next_seq);
         let mut fill = Mask16::NONE;
+        let (mut origins, mut dirs) = ([Vec3::ZERO; LANES], [Vec3::ZERO; LANES]);
         for lane in (!paths.active).lanes().take(room as usize) {
             fill.0 |= 1 << lane;
             queued[lane] = next_seq;
             next_seq += 1;
+            let (pixel, sample) = next;
+            next = if sample + 1 < opts.spp {
+                (pixel, sample + 1)
+            } else {
+                (pixel + 1, 0)
+            };
+            let pixel = pixel as usize;
+            let camera = camera_sample(&film_rays, &keys[pixel], pixels[pixel], sample);
+            paths.streams.start(lane, &camera.sampler, DIM_FIRST_BOUNCE);
+            (origins[lane], dirs[lane]) = (camera.ray.origin, camera.ray.dir);
         }
         if fill.any() {
-            paths.streams.set(k, &keys, fill, &mut next, opts.spp);
-            let film = keys.film16(k, &paths.streams, fill);
-            let pixel = paths.streams.pixel;
-            let film = [
-                F32x16::gather(&film_x, pixel, fill, zero) + film[0],
-                F32x16::gather(&film_y, pixel, fill, zero) + film[1],
-            ];
-            let camera = film_rays.rays16(k, film);
+            let (origin, dir) = (
+                Vec3x16::from_lanes(k, &origins),
+                Vec3x16::from_lanes(k, &dirs),
+            );
             paths.ray = Rays16 {
-                origin: Vec3x16::select(fill, camera.origin, paths.ray.origin),
-                dir: Vec3x16::select(fill, camera.dir, paths.ray.dir),
-                t_min: F32x16::select(fill, camera.t_min, paths.ray.t_min),
-                t_max: F32x16::select(fill, camera.t_max, paths.ray.t_max),
+                origin: Vec3x16::select(fill, origin, paths.ray.origin),
+                dir: Vec3x16::select(fill, dir, paths.ray.dir),
+                t_min: F32x16::select(fill, zero, paths.ray.t_min),
+                t_max: F32x16::select(fill, F32x16::splat(k, f32::INFINITY), paths.ray.t_max),
             };
             paths.beta = Vec3x16::select(fill, Vec3x16::splat(k, Vec3::ONE), paths.beta);
             paths.radiance = Vec3x16::select(fill, zero3, paths.radiance);
