@@ -10,6 +10,15 @@
 //! Random dimensions: the film position uses dimensions 0–1; bounce `k`
 //! (0-based) uses the block `2 + 8k …`: light selection, light position (2),
 //! lobe choice, direction (2), Russian roulette (the `DIM_*` offsets).
+//!
+//! Two bounce loops ([`Kernel`]): the scalar one (module `path`) traces one
+//! path at a time and records paths; the wide one (module `wide`, CPUs
+//! with AVX-512) traces sixteen paths at once, one per vector lane, with the
+//! same operations in every lane, so it renders the same image. Images
+//! ([`render`]) come from the wide loop where the CPU has it; records
+//! ([`render_recorded`], [`trace_samples`]) and ray logs ([`render_logged`])
+//! from the scalar one, which is also the reference the wide loop is tested
+//! against (`tests/wide.rs`: every shipped scene byte for byte).
 
 use std::time::Instant;
 
