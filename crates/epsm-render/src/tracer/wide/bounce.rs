@@ -3,10 +3,7 @@
 //! with the same operations, so every lane computes what the scalar loop
 //! computes for its path.
 
-use super::shims::{
-    Materials16, background_eval16, closest_hits16, light_sample16, occluded16, pdf_area16,
-    pdf_background16, surface_points16,
-};
+use super::shims::{Materials16, closest_hits16, occluded16, surface_points16};
 use super::{Objects16, Setup};
 use crate::ray::{Rays16, offset_origins16};
 use crate::sampler::wide::{Block16, Streams16};
@@ -85,12 +82,12 @@ pub(super) fn bounce(
     let hit = active & hits.found;
     if missed.any() {
         let dir = paths.ray.dir.normalize(k);
-        let le = background_eval16(scene.background(), k, dir, missed);
+        let le = scene.background().eval16(k, dir, missed);
         let lit = missed.and_not(le.is_zero(k));
         if lit.any() {
             let weighted = paths.has_prev & lit;
             let w = if weighted.any() {
-                let pdf = pdf_background16(lights, k, dir, weighted);
+                let pdf = lights.pdf_background16(k, dir, weighted);
                 F32x16::select(paths.has_prev, mis(k, paths.prev_pdf, pdf), k.f32(1.0))
             } else {
                 k.f32(1.0)
@@ -119,8 +116,7 @@ pub(super) fn bounce(
         );
         let weighted = emits & paths.has_prev;
         let w = if weighted.any() {
-            let pdf = pdf_area16(
-                lights,
+            let pdf = lights.pdf_area16(
                 k,
                 hits.object,
                 hits.triangle,
@@ -166,8 +162,7 @@ pub(super) fn bounce(
     let nee = (scatters & hit).and_not(materials.is_delta16(material, scatters & hit));
     let mut nee_contribution = k.vec3(glam::Vec3::ZERO);
     if nee.any() {
-        let ls = light_sample16(
-            lights,
+        let ls = lights.sample16(
             k,
             sp.p,
             numbers.get_1d(DIM_LIGHT_SELECT),

@@ -6,7 +6,6 @@ use glam::{Vec2, Vec3};
 use crate::bvh::Accel;
 use crate::frame::Frames16;
 use crate::hit::{Hits16, SurfacePoint, SurfacePoints16, TexCoords16};
-use crate::lights::{Background, LightTable};
 use crate::materials::Material;
 use crate::ray::Rays16;
 use crate::scene::Object;
@@ -161,103 +160,4 @@ impl Materials16<'_> {
         }
         F32x16::from_array(k, out)
     }
-}
-
-pub(super) struct LightSamples16 {
-    pub found: Mask16,
-    pub wo: Vec3x16,
-    pub dist: F32x16,
-    pub position: Vec3x16,
-    pub radiance: Vec3x16,
-    pub pdf: F32x16,
-    pub delta: Mask16,
-}
-
-pub(super) fn light_sample16(
-    lights: &LightTable,
-    k: Avx512,
-    p: Vec3x16,
-    u_select: F32x16,
-    u: [F32x16; 2],
-    active: Mask16,
-) -> LightSamples16 {
-    let (mut wo, mut position, mut radiance) = (
-        [Vec3::ZERO; LANES],
-        [Vec3::ZERO; LANES],
-        [Vec3::ZERO; LANES],
-    );
-    let (mut dist, mut pdf) = ([0.0; LANES], [0.0; LANES]);
-    let (mut found, mut delta) = (Mask16::NONE, Mask16::NONE);
-    for lane in active.lanes() {
-        let Some(s) = lights.sample(
-            p.lane(lane),
-            u_select.lane(lane),
-            Vec2::new(u[0].lane(lane), u[1].lane(lane)),
-        ) else {
-            continue;
-        };
-        found.0 |= 1 << lane;
-        delta.0 |= u16::from(s.delta) << lane;
-        (wo[lane], position[lane], radiance[lane]) = (s.wo, s.position, s.radiance);
-        (dist[lane], pdf[lane]) = (s.dist, s.pdf);
-    }
-    LightSamples16 {
-        found,
-        wo: Vec3x16::from_lanes(k, &wo),
-        dist: F32x16::from_array(k, dist),
-        position: Vec3x16::from_lanes(k, &position),
-        radiance: Vec3x16::from_lanes(k, &radiance),
-        pdf: F32x16::from_array(k, pdf),
-        delta,
-    }
-}
-
-#[allow(clippy::too_many_arguments)]
-pub(super) fn pdf_area16(
-    lights: &LightTable,
-    k: Avx512,
-    object: U32x16,
-    triangle: U32x16,
-    p: Vec3x16,
-    y: Vec3x16,
-    n: Vec3x16,
-    active: Mask16,
-) -> F32x16 {
-    let mut out = [0.0; LANES];
-    for lane in active.lanes() {
-        out[lane] = lights.pdf_area(
-            object.lane(lane),
-            triangle.lane(lane),
-            p.lane(lane),
-            y.lane(lane),
-            n.lane(lane),
-        );
-    }
-    F32x16::from_array(k, out)
-}
-
-pub(super) fn pdf_background16(
-    lights: &LightTable,
-    k: Avx512,
-    dir: Vec3x16,
-    active: Mask16,
-) -> F32x16 {
-    let mut out = [0.0; LANES];
-    for lane in active.lanes() {
-        out[lane] = lights.pdf_background(dir.lane(lane));
-    }
-    F32x16::from_array(k, out)
-}
-
-pub(super) fn background_eval16(
-    background: &Background,
-    k: Avx512,
-    dir: Vec3x16,
-    active: Mask16,
-) -> Vec3x16 {
-    let mut out = [Vec3::ZERO; LANES];
-    for lane in active.lanes() {
-        out[lane] = background.eval(dir.lane(lane));
-    }
-    Vec3x16::from_lanes(k, &out)
 }
