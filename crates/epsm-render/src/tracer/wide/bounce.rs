@@ -3,7 +3,7 @@
 //! with the same operations, so every lane computes what the scalar loop
 //! computes for its path.
 
-use super::shims::{Materials16, closest_hits16, occluded16, surface_points16};
+use super::shims::{closest_hits16, occluded16, surface_points16};
 use super::{Objects16, Setup};
 use crate::ray::{Rays16, offset_origins16};
 use crate::sampler::wide::{Block16, Streams16};
@@ -132,9 +132,7 @@ pub(super) fn bounce(
         contribution = add_where(emits, contribution, paths.beta * le * w);
     }
 
-    let materials = Materials16 {
-        materials: scene.materials(),
-    };
+    let materials = setup.materials;
     let frame = &sp.frame;
     let wi = materials.to_local16(k, material, frame, wi_world, hit);
 
@@ -159,7 +157,7 @@ pub(super) fn bounce(
     // Next-event estimation toward a light (what it adds is zero in the
     // lanes it does not reach, and added to every hit lane's contribution,
     // as in the scalar loop).
-    let nee = (scatters & hit).and_not(materials.is_delta16(material, scatters & hit));
+    let nee = (scatters & hit).and_not(materials.is_delta16(k, material, scatters & hit));
     let mut nee_contribution = k.vec3(glam::Vec3::ZERO);
     if nee.any() {
         let ls = lights.sample16(

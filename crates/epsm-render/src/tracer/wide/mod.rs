@@ -24,6 +24,7 @@ mod shims;
 use glam::{UVec2, Vec3};
 
 use super::{DIM_FIRST_BOUNCE, DIMS_PER_BOUNCE, RenderOptions, TILE, TileOutput, camera_sample};
+use crate::materials::wide::Materials16;
 use crate::ray::Rays16;
 use crate::sampler::wide::Streams16;
 use crate::sampler::{PixelKeys, STRATIFIED_DIMENSIONS};
@@ -73,6 +74,7 @@ struct Setup<'a> {
     scene: &'a Scene,
     opts: &'a RenderOptions,
     objects: &'a Objects16,
+    materials: &'a Materials16,
 }
 
 /// The wide tracer of one render: the CPU token and the scene's lane
@@ -80,6 +82,7 @@ struct Setup<'a> {
 pub(super) struct WideTracer {
     k: Avx512,
     objects: Objects16,
+    materials: Materials16,
 }
 
 impl WideTracer {
@@ -88,6 +91,7 @@ impl WideTracer {
         Some(Self {
             k: Avx512::detect()?,
             objects: Objects16::new(scene),
+            materials: Materials16::new(scene.materials()),
         })
     }
 
@@ -99,7 +103,7 @@ impl WideTracer {
         // SAFETY: `render_tile_avx512` requires only the CPU features it
         // enables, and `self.k` (an `Avx512` token) exists only on a CPU
         // found to have each of them.
-        unsafe { render_tile_avx512(self.k, scene, opts, &self.objects, tile) }
+        unsafe { render_tile_avx512(self.k, scene, opts, self, tile) }
     }
 }
 
@@ -111,7 +115,7 @@ fn render_tile_avx512(
     k: Avx512,
     scene: &Scene,
     opts: &RenderOptions,
-    objects: &Objects16,
+    tracer: &WideTracer,
     tile: UVec2,
 ) -> TileOutput {
     let (w, h) = (scene.camera().width, scene.camera().height);
@@ -126,7 +130,8 @@ fn render_tile_avx512(
     let setup = Setup {
         scene,
         opts,
-        objects,
+        objects: &tracer.objects,
+        materials: &tracer.materials,
     };
     let spp = u64::from(opts.spp);
     let total = pixels.len() as u64 * spp;
