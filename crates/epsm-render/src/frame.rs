@@ -149,13 +149,13 @@ impl Frames16 {
 
     /// [`Frame::to_local`] in every lane.
     #[inline(always)]
-    pub fn to_local(&self, v: Vec3x16) -> Vec3x16 {
+    pub fn to_local(self, v: Vec3x16) -> Vec3x16 {
         Vec3x16::new(v.dot(self.s), v.dot(self.t), v.dot(self.n))
     }
 
     /// [`Frame::to_world`] in every lane.
     #[inline(always)]
-    pub fn to_world(&self, v: Vec3x16) -> Vec3x16 {
+    pub fn to_world(self, v: Vec3x16) -> Vec3x16 {
         self.s * v.x + self.t * v.y + self.n * v.z
     }
 }

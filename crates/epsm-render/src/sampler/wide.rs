@@ -76,7 +76,7 @@ impl Streams16 {
         let mut numbers = [k.f32(0.0); BLOCK];
         for (number, drawn) in numbers.iter_mut().zip(&self.first) {
             // `to_unit(mix_weyl(x))`.
-            let bits = ((x ^ (x >> 32)) * k.u64(MIX_WEYL) >> 32).low_u32();
+            let bits = (((x ^ (x >> 32)) * k.u64(MIX_WEYL)) >> 32).low_u32();
             x = x + golden;
             let hashed = F32x16::from_u32(bits >> 8) * k.f32(UNIT);
             *number = F32x16::select(first_bounce, F32x16::from_array(k, *drawn), hashed);

@@ -42,6 +42,17 @@ fn values(rng: &mut Rng) -> [f32; LANES] {
     })
 }
 
+/// A named lane result and the scalar operation it stands for.
+type Case<R, F> = (&'static str, R, F);
+/// A unary `f32` case.
+type Unary = Case<F32x16, fn(f32) -> f32>;
+/// A binary `f32` case.
+type Binary = Case<F32x16, fn(f32, f32) -> f32>;
+/// An `f32` comparison case.
+type Compare = Case<Mask16, fn(f32, f32) -> bool>;
+/// A binary `f64` case.
+type Binary64 = Case<F64x16, fn(f64, f64) -> f64>;
+
 /// Equal bit patterns, or both NaN.
 fn same(a: f32, b: f32) -> bool {
     a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan())
@@ -59,7 +70,7 @@ fn f32_lanes_match_scalar_operations() {
         let (a, b) = (values(&mut rng), values(&mut rng));
         let (x, y) = (F32x16::from_array(k, a), F32x16::from_array(k, b));
         let m = Mask16(rng.below(1 << 16) as u16);
-        let unary: [(&str, F32x16, fn(f32) -> f32); 4] = [
+        let unary: [Unary; 4] = [
             ("sqrt", x.sqrt(), f32::sqrt),
             ("abs", x.abs(), f32::abs),
             ("neg", -x, |a| -a),
@@ -70,7 +81,7 @@ fn f32_lanes_match_scalar_operations() {
                 assert!(same(g, f(a[i])), "{name}({})", a[i]);
             }
         }
-        let binary: [(&str, F32x16, fn(f32, f32) -> f32); 8] = [
+        let binary: [Binary; 8] = [
             ("add", x + y, |a, b| a + b),
             ("sub", x - y, |a, b| a - b),
             ("mul", x * y, |a, b| a * b),
@@ -89,7 +100,7 @@ fn f32_lanes_match_scalar_operations() {
                 assert!(same(g, f(a[i], b[i])), "{name}({}, {})", a[i], b[i]);
             }
         }
-        let compares: [(&str, Mask16, fn(f32, f32) -> bool); 6] = [
+        let compares: [Compare; 6] = [
             ("lt", x.lt(y), |a, b| a < b),
             ("le", x.le(y), |a, b| a <= b),
             ("gt", x.gt(y), |a, b| a > b),
@@ -133,7 +144,7 @@ fn f64_lanes_match_scalar_operations() {
         let (a, b) = (a.map(f64::from), b.map(|v| f64::from(v) * 1.000_000_1));
         let (x, y) = (F64x16::from_array(k, a), F64x16::from_array(k, b));
         let m = Mask16(rng.below(1 << 16) as u16);
-        let results: [(&str, F64x16, fn(f64, f64) -> f64); 11] = [
+        let results: [Binary64; 11] = [
             ("add", x + y, |a, b| a + b),
             ("sub", x - y, |a, b| a - b),
             ("mul", x * y, |a, b| a * b),
@@ -175,6 +186,9 @@ fn f64_lanes_match_scalar_operations() {
     }
 }
 
+/// A scalar integer operation of two lanes and a shift.
+type Ternary = fn(u32, u32, u32) -> u32;
+
 #[test]
 fn integer_lanes_match_wrapping_scalar_operations() {
     let Some(k) = token() else { return };
@@ -184,7 +198,7 @@ fn integer_lanes_match_wrapping_scalar_operations() {
         let b: [u32; LANES] = std::array::from_fn(|_| rng.below(1 << 32) as u32);
         let (x, y) = (U32x16::from_array(k, a), U32x16::from_array(k, b));
         let n = rng.below(33) as u32;
-        let results: [(U32x16, fn(u32, u32, u32) -> u32); 8] = [
+        let results: [(U32x16, Ternary); 8] = [
             (x + y, |a, b, _| a.wrapping_add(b)),
             (x - y, |a, b, _| a.wrapping_sub(b)),
             (x * y, |a, b, _| a.wrapping_mul(b)),
@@ -204,7 +218,7 @@ fn integer_lanes_match_wrapping_scalar_operations() {
             assert_eq!(shifted[i], a[i].checked_shl(n).unwrap_or(0));
             assert_eq!(x.lt(y).test(i), a[i] < b[i]);
             assert_eq!(x.ge(y).test(i), a[i] >= b[i]);
-            assert_eq!(x.eq(x).test(i), true);
+            assert!(x.eq(x).test(i));
         }
         // 64-bit lanes.
         let c: [u64; LANES] = std::array::from_fn(|i| u64::from(a[i]) << 32 | u64::from(b[i]));

@@ -99,7 +99,7 @@ pub(super) fn bounce(
         return active;
     }
     let sp = surface_points16(accel, k, scene.objects(), &hits);
-    let objects: &Objects16 = &setup.objects;
+    let objects: &Objects16 = setup.objects;
     let material = U32x16::gather(&objects.material, hits.object, hit, k.u32(0));
     let wi_world = -paths.ray.dir;
     let wi_ng = wi_world.dot(sp.ng);
