@@ -115,6 +115,21 @@ pub(crate) struct FlatHit {
     pub b2: f32,
 }
 
+/// One node of a [`FlatBvh`] as [`FlatBvh::node_parts`] shows it.
+pub(super) struct NodeParts<'a> {
+    /// The child boxes.
+    pub boxes: &'a ChildBoxes,
+    /// Per child slot: the node index of an inner child (0 for leaf and
+    /// absent children).
+    pub children: [u32; 8],
+    /// Bit `c` set when child `c` is a leaf.
+    pub leaves: u8,
+    /// Bit `c` set when child `c` is an inner node.
+    pub inner: u8,
+    /// The packets of the leaf children's triangles, in child order.
+    pub packets: &'a [TrianglePacket],
+}
+
 /// 8-wide nodes over triangle packets, root first.
 #[derive(Clone, Debug)]
 pub(crate) struct FlatBvh {
@@ -182,6 +197,21 @@ impl FlatBvh {
             packets,
             len: built.triangles.len(),
         }
+    }
+
+    /// The nodes as other traversal layouts read them, root first (module
+    /// `wide` builds its sixteen-ray layout from them).
+    pub fn node_parts(&self) -> impl Iterator<Item = NodeParts<'_>> {
+        self.nodes.iter().map(|n| {
+            let first = n.first_packet as usize;
+            NodeParts {
+                boxes: &n.boxes,
+                children: n.children,
+                leaves: n.leaves,
+                inner: n.inner,
+                packets: &self.packets[first..first + n.packet_count as usize],
+            }
+        })
     }
 
     /// Number of triangles.

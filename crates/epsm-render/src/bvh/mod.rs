@@ -37,6 +37,7 @@
 //!
 //! No parameters.
 
+mod batch;
 mod blas;
 mod flat;
 mod node;
@@ -45,6 +46,8 @@ mod shading;
 mod tlas;
 mod triangle;
 mod walk;
+#[cfg(target_arch = "x86_64")]
+mod wide;
 mod world;
 
 use std::collections::HashMap;
@@ -445,12 +448,26 @@ impl Accel {
                 return hit(found, best);
             }
         }
+        self.trace_instances::<ANY>(&mut world, found, best, boxes)
+    }
+
+    /// The end of [`Accel::trace`]: the top level's instances walked by
+    /// `world` (its `t_max` lowered to the best hit so far, `best` in
+    /// `found`), and the [`Hit`] of the best hit then.
+    #[inline(always)]
+    fn trace_instances<const ANY: bool>(
+        &self,
+        world: &mut TraceRay,
+        mut found: Found<'_>,
+        mut best: Option<FlatHit>,
+        boxes: impl BoxTest,
+    ) -> Option<Hit> {
         if self.tlas.slots.is_empty() {
             return hit(found, best);
         }
         walk(
             &self.tlas.bvh,
-            &mut world,
+            world,
             boxes,
             #[inline(always)]
             |slot, world| {

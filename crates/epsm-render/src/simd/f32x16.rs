@@ -310,4 +310,17 @@ impl F32x16 {
             table.as_ptr()
         )))
     }
+
+    /// Lane `i` is lane `index[i] % 16` of `self` (one `vpermps`).
+    #[inline(always)]
+    pub fn permute(self, index: U32x16) -> Self {
+        Self(avx!(_mm512_permutexvar_ps(index.0, self.0)))
+    }
+
+    /// The smallest of the lanes of `m` (`+∞` without any), for orderings
+    /// only: which lane a NaN or a `±0` tie yields is unspecified.
+    #[inline(always)]
+    pub fn reduce_min(self, m: Mask16) -> f32 {
+        avx!(_mm512_mask_reduce_min_ps(m.0, self.0))
+    }
 }

@@ -164,4 +164,20 @@ impl F64x16 {
             hi
         )))
     }
+
+    /// The magnitude of `self` with the sign bit of `sign` (`f64::copysign`).
+    #[inline(always)]
+    pub fn copysign(self, sign: Self) -> Self {
+        // Ternary logic 0xCA (`a ? b : c` bitwise): bits of `sign` where the
+        // sign mask is set, of `self` elsewhere.
+        let mask = avx!(_mm512_castpd_si512(_mm512_set1_pd(-0.0)));
+        let half = |m: __m512d, s: __m512d| {
+            avx!(_mm512_castsi512_pd(_mm512_ternarylogic_epi64::<0xCA>(
+                mask,
+                _mm512_castpd_si512(s),
+                _mm512_castpd_si512(m),
+            )))
+        };
+        Self([half(self.0[0], sign.0[0]), half(self.0[1], sign.0[1])])
+    }
 }

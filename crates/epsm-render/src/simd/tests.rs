@@ -341,3 +341,31 @@ fn vectors_match_glam() {
         }
     }
 }
+
+#[test]
+fn permutes_minima_and_f64_copysign_match_scalar_operations() {
+    let Some(k) = token() else { return };
+    let mut rng = Rng::new(6);
+    for _ in 0..2000 {
+        let (a, b) = (values(&mut rng), values(&mut rng));
+        let x = F32x16::from_array(k, a);
+        let index: [u32; LANES] = std::array::from_fn(|_| rng.u64() as u32);
+        let permuted = x.permute(U32x16::from_array(k, index)).to_array();
+        for i in 0..LANES {
+            assert!(same(permuted[i], a[index[i] as usize % LANES]));
+        }
+        let m = Mask16(rng.below(1 << 16) as u16);
+        let finite = a.map(|v| if v.is_nan() { 0.5 } else { v });
+        let smallest = m
+            .lanes()
+            .map(|i| finite[i])
+            .fold(f32::INFINITY, |s, v| if v < s { v } else { s });
+        // A ±0 tie may yield either zero: compare values, not bits.
+        assert_eq!(F32x16::from_array(k, finite).reduce_min(m), smallest);
+        let (a, b) = (a.map(f64::from), b.map(f64::from));
+        let signed = F64x16::from_array(k, a).copysign(F64x16::from_array(k, b));
+        for (i, got) in signed.to_array().into_iter().enumerate() {
+            assert!(same64(got, a[i].copysign(b[i])), "{} {}", a[i], b[i]);
+        }
+    }
+}

@@ -1,0 +1,314 @@
+//! Sixteen rays at a time, one per AVX-512 lane, for the wide tracer:
+//! closest hits ([`Accel::closest_hits16`]), occlusion
+//! ([`Accel::occluded16`]) and shading points
+//! ([`Accel::surface_points16`]), each lane what the scalar function gives
+//! for its ray or hit.
+//!
+//! Model: the scalar trace's steps with a lane per ray. The listed exact
+//! spheres are tested first in `f64` lanes (module `spheres`), as the
+//! tracer's `SpheresFirst` walk does, and kept aside. The static BVH is
+//! walked as a packet (module `walk`): at each node the lanes that reached
+//! it are tested against each child box (module `tree`), and a leaf child's
+//! triangles against the lanes that enter its box by the watertight test
+//! per lane (module `triangles`), each lane with its own closest `t` and
+//! triangle. A sphere then wins a lane whose static hit is no closer
+//! (`t_sphere ≤ t_triangle`: the scalar rule that a listed sphere wins a
+//! tie). Instances behind the top level (dynamic objects, instanced large
+//! meshes, scenes with more than two exact spheres) are walked per lane by
+//! the scalar code itself (`Accel::trace_instances`), starting from the
+//! lane's best hit so far, as the scalar trace does after the static BVH.
+//! Occlusion runs the same steps, each lane leaving at its first hit.
+//!
+//! Every lane's tests round exactly as the scalar ones (the same operations
+//! in the same order, `f64` where the scalar code uses it), so a lane finds
+//! every hit the scalar walk finds, with the same `t`, barycentrics and
+//! ids. The one difference: two primitives hit at the same `t` (to within
+//! the rounding of the range tests against the `t_max` a walk carries, as
+//! for a ray through an edge shared by two triangles). The scalar walk
+//! keeps the one its visiting order meets first (or last), and the packet
+//! visits nodes in its own order, so it may report the other. Occlusion
+//! has no such case (any hit will do), nor has a sphere tying with a
+//! triangle (the sphere wins both ways). The tests count these ties; there
+//! are none in their random scenes.
+//!
+//! No parameters.
+
+mod affine;
+mod points;
+mod rays;
+mod spheres;
+mod tree;
+mod triangles;
+mod walk;
+
+#[cfg(test)]
+mod tests;
+
+use glam::{Vec3, Vec3A};
+
+use super::flat::{FlatBvh, FlatHit};
+use super::node::{Avx, TraceRay};
+use super::shading::ShadingTriangle;
+use super::world::TriangleRef;
+use super::{Accel, Found, NO_WORLD_INDEX};
+use crate::frame::Frame;
+use crate::hit::{Hit, Hits16, SurfacePoint, SurfacePoints16, TexCoords};
+use crate::ray::{Ray, Rays16};
+use crate::scene::Object;
+use crate::simd::{Avx512, F32x16, LANES, Mask16, U32x16};
+use points::ShadingTable;
+use rays::RayLanes;
+use tree::Tree16;
+use walk::Closest16;
+
+/// The static BVH's tables for sixteen rays at a time.
+#[derive(Clone, Debug)]
+pub(crate) struct World16 {
+    /// The packet walk's layout of the static BVH.
+    tree: Tree16,
+    /// Per static triangle (a hit's id): its object.
+    objects: Vec<u32>,
+    /// Per static triangle: its index in its object's mesh.
+    triangles: Vec<u32>,
+    /// Per static triangle: its shading data.
+    shading: ShadingTable,
+}
+
+impl World16 {
+    /// The tables of the static BVH `bvh` over the triangles `refs` with
+    /// shading data `shading` (same indices).
+    pub fn new(bvh: &FlatBvh, refs: &[TriangleRef], shading: &[ShadingTriangle]) -> Self {
+        Self {
+            tree: Tree16::new(bvh),
+            objects: refs.iter().map(|r| r.object).collect(),
+            triangles: refs.iter().map(|r| r.triangle).collect(),
+            shading: ShadingTable::new(shading),
+        }
+    }
+
+    /// Approximate heap size in bytes.
+    pub fn bytes(&self) -> usize {
+        self.tree.bytes() + 8 * self.objects.len() + self.shading.bytes()
+    }
+}
+
+impl Accel {
+    /// Lane `i` in `active`: exactly `self.closest_hit(&rays.lane(i))`
+    /// (but for ties, module docs); other lanes: `found` unset.
+    #[inline(always)]
+    pub(crate) fn closest_hits16(&self, k: Avx512, rays: &Rays16, active: Mask16) -> Hits16 {
+        let lanes = RayLanes::new(k, rays);
+        let spheres = if self.listed.is_empty() {
+            None
+        } else {
+            Some(self.listed_hits16::<false>(&lanes, active))
+        };
+        let mut best = Closest16::none(&lanes);
+        let (zero, none) = (U32x16::splat(k, 0), U32x16::splat(k, NO_WORLD_INDEX));
+        let mut hits = Hits16 {
+            found: Mask16::NONE,
+            object: zero,
+            triangle: zero,
+            b1: best.b1,
+            b2: best.b2,
+            t: best.t,
+            world_index: none,
+        };
+        if let Some(world) = self.world.as_deref() {
+            let w = &world.wide;
+            w.tree.walk::<false>(&lanes, active, &mut best);
+            hits = Hits16 {
+                found: best.found,
+                object: U32x16::gather(&w.objects, best.id, best.found, zero),
+                triangle: U32x16::gather(&w.triangles, best.id, best.found, zero),
+                b1: best.b1,
+                b2: best.b2,
+                t: best.t,
+                world_index: best.id,
+            };
+        }
+        if let Some(s) = spheres {
+            // A sphere wins a tie with a triangle.
+            let wins = s.found & s.t.le(best.t);
+            hits = Hits16 {
+                found: hits.found | wins,
+                object: U32x16::select(wins, s.object, hits.object),
+                triangle: U32x16::select(wins, zero, hits.triangle),
+                b1: F32x16::select(wins, s.b1, hits.b1),
+                b2: F32x16::select(wins, s.b2, hits.b2),
+                t: F32x16::select(wins, s.t, hits.t),
+                world_index: U32x16::select(wins, none, hits.world_index),
+            };
+        }
+        if !self.tlas.slots.is_empty() && active.any() {
+            let (rays, best) = (ray_lanes(rays), hit_lanes(&hits));
+            let lanes = std::array::from_fn(|i| (active.test(i), rays[i], best[i]));
+            hits = Hits16::from_lanes(k, &self.instances_per_lane::<false>(k, lanes));
+        }
+        hits
+    }
+
+    /// Lane `i` in `active`: exactly `self.occluded(&rays.lane(i))`; other
+    /// lanes unset.
+    #[inline(always)]
+    pub(crate) fn occluded16(&self, k: Avx512, rays: &Rays16, active: Mask16) -> Mask16 {
+        let lanes = RayLanes::new(k, rays);
+        let mut occluded = Mask16::NONE;
+        if !self.listed.is_empty() {
+            occluded = self.listed_hits16::<true>(&lanes, active).found;
+        }
+        if let Some(world) = self.world.as_deref() {
+            let mut best = Closest16::none(&lanes);
+            world
+                .wide
+                .tree
+                .walk::<true>(&lanes, active.and_not(occluded), &mut best);
+            occluded = occluded | best.found;
+        }
+        let rest = active.and_not(occluded);
+        if !self.tlas.slots.is_empty() && rest.any() {
+            let rays = ray_lanes(rays);
+            let lanes = std::array::from_fn(|i| (rest.test(i), rays[i], None));
+            let found = self.instances_per_lane::<true>(k, lanes);
+            for (lane, hit) in found.iter().enumerate() {
+                occluded.0 |= u16::from(hit.is_some()) << lane;
+            }
+        }
+        occluded
+    }
+
+    /// Lane `i` in `hits.found`: exactly `self.surface_point(objects,
+    /// &hits.lane(i).unwrap())`; other lanes unspecified.
+    #[inline(always)]
+    pub(crate) fn surface_points16(
+        &self,
+        k: Avx512,
+        objects: &[Object],
+        hits: &Hits16,
+    ) -> SurfacePoints16 {
+        let mut done = Mask16::NONE;
+        let mut out = points::blank(k);
+        if let Some(world) = self.world.as_deref() {
+            // The scalar test: the hit's index names this triangle.
+            let w = &world.wide;
+            let valid = hits.found
+                & hits
+                    .world_index
+                    .lt(U32x16::splat(k, w.objects.len() as u32));
+            let zero = U32x16::splat(k, 0);
+            let object = U32x16::gather(&w.objects, hits.world_index, valid, zero);
+            let triangle = U32x16::gather(&w.triangles, hits.world_index, valid, zero);
+            done = valid & object.eq(hits.object) & triangle.eq(hits.triangle);
+            if done.any() {
+                out = w
+                    .shading
+                    .points(k, hits.world_index, done, hits.b1, hits.b2);
+            }
+        }
+        for &index in &self.listed {
+            let instance = &self.instances[index as usize];
+            let on = hits.found.and_not(done) & hits.object.eq(U32x16::splat(k, instance.object));
+            if let Some(placement) = &instance.placement
+                && on.any()
+            {
+                let sphere = points::sphere_points(k, placement, hits.b1, hits.b2);
+                out = points::select(on, &sphere, &out);
+                done = done | on;
+            }
+        }
+        let rest = hits.found.and_not(done);
+        if rest.any() {
+            let lanes = hit_lanes(hits);
+            let lanes = std::array::from_fn(|i| lanes[i].filter(|_| rest.test(i)));
+            let scalar = SurfacePoints16::from_lanes(k, &self.points_per_lane(objects, lanes));
+            out = points::select(rest, &scalar, &out);
+        }
+        out
+    }
+
+    /// The scalar top-level walk per lane: for each `(active, ray, best)`
+    /// with `active`, the trace's hit from its best hit so far on; `None`
+    /// for the others.
+    #[inline(never)]
+    fn instances_per_lane<const ANY: bool>(
+        &self,
+        k: Avx512,
+        lanes: [(bool, Ray, Option<Hit>); LANES],
+    ) -> [Option<Hit>; LANES] {
+        let boxes = Avx::from_avx512(k);
+        lanes.map(|(active, ray, best)| {
+            if !active {
+                return None;
+            }
+            let t_max = best.map_or(ray.t_max, |h| h.t);
+            let (origin, dir) = (Vec3A::from(ray.origin), Vec3A::from(ray.dir));
+            let mut world = TraceRay::for_walk::<ANY>(origin, dir, ray.t_min, t_max);
+            let found = match best {
+                None => Found::Nothing,
+                Some(h) if h.world_index == NO_WORLD_INDEX => Found::Instance(h.object),
+                Some(_) => self.world.as_deref().map_or(Found::Nothing, Found::World),
+            };
+            let flat = best.map(|h| FlatHit {
+                id: if h.world_index == NO_WORLD_INDEX {
+                    h.triangle
+                } else {
+                    h.world_index
+                },
+                t: h.t,
+                b1: h.b1,
+                b2: h.b2,
+            });
+            self.trace_instances::<ANY>(&mut world, found, flat, boxes)
+        })
+    }
+
+    /// [`Accel::surface_point`] of each hit (a placeholder point for
+    /// `None`).
+    #[inline(never)]
+    fn points_per_lane(
+        &self,
+        objects: &[Object],
+        hits: [Option<Hit>; LANES],
+    ) -> [SurfacePoint; LANES] {
+        hits.map(|hit| match hit {
+            Some(hit) => self.surface_point(objects, &hit),
+            None => SurfacePoint {
+                p: Vec3::ZERO,
+                ng: Vec3::Z,
+                uv: TexCoords::Uv(glam::Vec2::ZERO),
+                frame: Frame::from_normal(Vec3::Z),
+            },
+        })
+    }
+}
+
+/// The rays of the lanes (for the per-lane fallbacks).
+#[inline(always)]
+fn ray_lanes(rays: &Rays16) -> [Ray; LANES] {
+    let (origin, dir) = (rays.origin.to_lanes(), rays.dir.to_lanes());
+    let (t_min, t_max) = (rays.t_min.to_array(), rays.t_max.to_array());
+    std::array::from_fn(|i| Ray {
+        origin: origin[i],
+        dir: dir[i],
+        t_min: t_min[i],
+        t_max: t_max[i],
+    })
+}
+
+/// The hits of the lanes (`None` outside `found`).
+#[inline(always)]
+fn hit_lanes(hits: &Hits16) -> [Option<Hit>; LANES] {
+    let (object, triangle) = (hits.object.to_array(), hits.triangle.to_array());
+    let (b1, b2, t) = (hits.b1.to_array(), hits.b2.to_array(), hits.t.to_array());
+    let world_index = hits.world_index.to_array();
+    std::array::from_fn(|i| {
+        hits.found.test(i).then_some(Hit {
+            object: object[i],
+            triangle: triangle[i],
+            b1: b1[i],
+            b2: b2[i],
+            t: t[i],
+            world_index: world_index[i],
+        })
+    })
+}
