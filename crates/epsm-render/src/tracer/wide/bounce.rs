@@ -3,7 +3,6 @@
 //! with the same operations, so every lane computes what the scalar loop
 //! computes for its path.
 
-use super::shims::{closest_hits16, occluded16, surface_points16};
 use super::{Objects16, Setup};
 use crate::ray::{Rays16, offset_origins16};
 use crate::sampler::wide::{Block16, Streams16};
@@ -77,7 +76,7 @@ pub(super) fn bounce(
     counters.rays += u64::from(active.count());
 
     // Find the next vertex; rays that leave see the background.
-    let hits = closest_hits16(accel, k, &paths.ray, active);
+    let hits = accel.closest_hits16(k, &paths.ray, active);
     let missed = active.and_not(hits.found);
     let hit = active & hits.found;
     if missed.any() {
@@ -98,7 +97,7 @@ pub(super) fn bounce(
     if !hit.any() {
         return active;
     }
-    let sp = surface_points16(accel, k, scene.objects(), &hits);
+    let sp = accel.surface_points16(k, scene.objects(), &hits);
     let objects: &Objects16 = setup.objects;
     let material = U32x16::gather(&objects.material, hits.object, hit, k.u32(0));
     let wi_world = -paths.ray.dir;
@@ -191,7 +190,7 @@ pub(super) fn bounce(
                 t_max: F32x16::select(finite, k.f32(1.0 - SHADOW_EPS), k.f32(f32::INFINITY)),
             };
             counters.shadow_rays += u64::from(lit.count());
-            let blocked = occluded16(accel, &shadow, lit);
+            let blocked = accel.occluded16(k, &shadow, lit);
             nee_contribution = Vec3x16::select(lit.and_not(blocked), unoccluded, nee_contribution);
         }
     }

@@ -19,7 +19,6 @@
 //! | `RING` | 4096 | samples that may finish ahead of the oldest unfinished one; a lane waits while the ring is full |
 
 mod bounce;
-mod shims;
 
 use glam::{UVec2, Vec3};
 
