@@ -28,6 +28,19 @@ impl Mask16 {
         Self(((1u32 << n) - 1) as u16)
     }
 
+    /// The lowest `n` lanes of `self` (all of them when it has fewer).
+    #[inline(always)]
+    pub fn first_of(self, n: u32) -> Self {
+        let mut bits = self.0;
+        let mut out = 0u16;
+        for _ in 0..n.min(LANES as u32) {
+            let lowest = bits & bits.wrapping_neg();
+            out |= lowest;
+            bits ^= lowest;
+        }
+        Self(out)
+    }
+
     /// Whether any lane is set.
     #[inline(always)]
     pub fn any(self) -> bool {
@@ -322,5 +335,20 @@ impl F32x16 {
     #[inline(always)]
     pub fn reduce_min(self, m: Mask16) -> f32 {
         avx!(_mm512_mask_reduce_min_ps(m.0, self.0))
+    }
+
+    /// `self` with the lanes of `m` replaced by `src[0]`, `src[1]`, … in
+    /// lane order (an expanding load).
+    ///
+    /// # Panics
+    /// If `src` holds fewer values than `m` has lanes.
+    #[inline(always)]
+    pub fn expand_from(self, m: Mask16, src: &[f32]) -> Self {
+        assert!(
+            src.len() >= m.count() as usize,
+            "expanding load past the slice"
+        );
+        // Reads `m.count()` consecutive `f32`s from `src`, in bounds (asserted).
+        Self(avx!(_mm512_mask_expandloadu_ps(self.0, m.0, src.as_ptr())))
     }
 }

@@ -263,15 +263,18 @@ fn masks_gathers_and_counting() {
         let got = F32x16::gather(&table, ix, m, F32x16::splat(k, -1.0)).to_array();
         let got_u = U32x16::gather(&words, ix, m, U32x16::splat(k, 9)).to_array();
         let counted = U32x16::splat(k, 5).count_into(m, 40).to_array();
+        let longs: Vec<u64> = words.iter().map(|&w| u64::from(w) << 33 | 1).collect();
+        let got_64 = U64x16::gather(&longs, ix, m, U64x16::splat(k, 3)).to_array();
         let mut next = 40;
         for i in 0..LANES {
             if m.test(i) {
                 assert_eq!(got[i], table[index[i] as usize]);
                 assert_eq!(got_u[i], words[index[i] as usize]);
+                assert_eq!(got_64[i], longs[index[i] as usize]);
                 assert_eq!(counted[i], next);
                 next += 1;
             } else {
-                assert_eq!((got[i], got_u[i], counted[i]), (-1.0, 9, 5));
+                assert_eq!((got[i], got_u[i], counted[i], got_64[i]), (-1.0, 9, 5, 3));
             }
         }
         assert_eq!(m.lanes().count() as u32, m.count());
@@ -366,6 +369,33 @@ fn permutes_minima_and_f64_copysign_match_scalar_operations() {
         let signed = F64x16::from_array(k, a).copysign(F64x16::from_array(k, b));
         for (i, got) in signed.to_array().into_iter().enumerate() {
             assert!(same64(got, a[i].copysign(b[i])), "{} {}", a[i], b[i]);
+        }
+    }
+}
+
+#[test]
+fn expanding_loads_fill_the_masked_lanes_in_order() {
+    let Some(k) = token() else { return };
+    let mut rng = Rng::new(6);
+    let src: Vec<f32> = (0..16).map(|i| i as f32 + 0.5).collect();
+    let words: Vec<u64> = (0..16).map(|i| (i as u64) << 40 | 7).collect();
+    for _ in 0..300 {
+        let m = Mask16(rng.below(1 << 16) as u16);
+        let start = rng.below(16 - m.count() as usize + 1);
+        let got = F32x16::splat(k, -1.0)
+            .expand_from(m, &src[start..])
+            .to_array();
+        let got_u = U64x16::splat(k, 9)
+            .expand_from(m, &words[start..])
+            .to_array();
+        let mut next = start;
+        for i in 0..LANES {
+            if m.test(i) {
+                assert_eq!((got[i], got_u[i]), (src[next], words[next]));
+                next += 1;
+            } else {
+                assert_eq!((got[i], got_u[i]), (-1.0, 9));
+            }
         }
     }
 }

@@ -4,7 +4,7 @@
 use std::arch::x86_64::*;
 use std::ops::{Add, BitXor, Mul, Shr};
 
-use super::{Avx512, LANES, U32x16};
+use super::{Avx512, LANES, Mask16, U32x16};
 
 /// Sixteen `u64` lanes: lanes 0–7 in the first register, 8–15 in the
 /// second (module docs of `simd`).
@@ -91,5 +91,67 @@ impl U64x16 {
             _mm512_castsi256_si512(lo),
             hi
         )))
+    }
+
+    /// `self` with the lanes of `m` replaced by `src[0]`, `src[1]`, … in
+    /// lane order (an expanding load).
+    ///
+    /// # Panics
+    /// If `src` holds fewer values than `m` has lanes.
+    #[inline(always)]
+    pub fn expand_from(self, m: Mask16, src: &[u64]) -> Self {
+        assert!(
+            src.len() >= m.count() as usize,
+            "expanding load past the slice"
+        );
+        let (lo, hi) = (m.0 as u8, (m.0 >> 8) as u8);
+        let rest = &src[lo.count_ones() as usize..];
+        // Each load reads as many consecutive `u64`s as its half of `m` has
+        // lanes: `src` from 0, then from the first half's count, both in
+        // bounds (asserted).
+        Self([
+            avx!(_mm512_mask_expandloadu_epi64(
+                self.0[0],
+                lo,
+                src.as_ptr().cast()
+            )),
+            avx!(_mm512_mask_expandloadu_epi64(
+                self.0[1],
+                hi,
+                rest.as_ptr().cast()
+            )),
+        ])
+    }
+
+    /// `table[index]` in the lanes of `m`, `fallback` in the others.
+    ///
+    /// # Panics
+    /// If an index of a lane in `m` is out of bounds.
+    #[inline(always)]
+    pub fn gather(table: &[u64], index: U32x16, m: Mask16, fallback: Self) -> Self {
+        let len = u32::try_from(table.len())
+            .unwrap_or(u32::MAX)
+            .min(i32::MAX as u32);
+        assert!(
+            (index.lt(U32x16(avx!(_mm512_set1_epi32(len as i32)))) | !m).all(),
+            "gather index out of bounds"
+        );
+        let (lo, hi) = (m.0 as u8, (m.0 >> 8) as u8);
+        // Every lane read (those of `m`) indexes `table` in bounds (asserted
+        // above, and below `i32::MAX`, so the signed indices are the same).
+        Self([
+            avx!(_mm512_mask_i32gather_epi64::<8>(
+                fallback.0[0],
+                lo,
+                _mm512_castsi512_si256(index.0),
+                table.as_ptr().cast()
+            )),
+            avx!(_mm512_mask_i32gather_epi64::<8>(
+                fallback.0[1],
+                hi,
+                _mm512_extracti64x4_epi64::<1>(index.0),
+                table.as_ptr().cast()
+            )),
+        ])
     }
 }

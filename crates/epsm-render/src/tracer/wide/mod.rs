@@ -19,17 +19,19 @@
 //! | `RING` | 4096 | samples that may finish ahead of the oldest unfinished one; a lane waits while the ring is full |
 
 mod bounce;
+mod queue;
 
 use glam::{UVec2, Vec3};
 
-use super::{DIM_FIRST_BOUNCE, DIMS_PER_BOUNCE, RenderOptions, TILE, TileOutput, camera_sample};
+use super::{DIM_FIRST_BOUNCE, DIMS_PER_BOUNCE, RenderOptions, TILE, TileOutput};
 use crate::materials::wide::Materials16;
 use crate::ray::Rays16;
+use crate::sampler::STRATIFIED_DIMENSIONS;
 use crate::sampler::wide::Streams16;
-use crate::sampler::{PixelKeys, STRATIFIED_DIMENSIONS};
 use crate::scene::Scene;
 use crate::simd::{Avx512, F32x16, LANES, Mask16, U32x16, Vec3x16};
 use bounce::{Paths16, bounce};
+use queue::Queue;
 
 /// Entries of the ring of finished samples (module docs).
 const RING: usize = 4096;
@@ -121,11 +123,7 @@ fn render_tile_avx512(
     let pixels: Vec<UVec2> = (tile.y * TILE..((tile.y + 1) * TILE).min(h))
         .flat_map(|y| (tile.x * TILE..((tile.x + 1) * TILE).min(w)).map(move |x| UVec2::new(x, y)))
         .collect();
-    let keys: Vec<PixelKeys> = pixels
-        .iter()
-        .map(|p| PixelKeys::new(opts.seed, p.y * w + p.x, opts.spp))
-        .collect();
-    let film_rays = scene.camera().film_rays();
+    let mut queue = Queue::new(&pixels, w, opts.seed, opts.spp, scene.camera().film_rays());
     let setup = Setup {
         scene,
         opts,
@@ -133,7 +131,7 @@ fn render_tile_avx512(
         materials: &tracer.materials,
     };
     let spp = u64::from(opts.spp);
-    let total = pixels.len() as u64 * spp;
+    let total = queue.total();
     let mut out = TileOutput {
         pixels: Vec::with_capacity(pixels.len()),
         records: Vec::new(),
@@ -143,14 +141,13 @@ fn render_tile_avx512(
     let mut ring = vec![Vec3::ZERO; RING];
     let mut done = vec![false; RING];
     let mut queued = [0u64; LANES];
-    let (mut next_seq, mut committed) = (0u64, 0u64);
-    let mut next = (0u32, 0u32);
+    let mut committed = 0u64;
     let mut sum = Vec3::ZERO;
     let zero3 = Vec3x16::splat(k, Vec3::ZERO);
     let zero = F32x16::splat(k, 0.0);
     let mut paths = Paths16 {
         active: Mask16::NONE,
-        streams: Streams16::new(),
+        streams: Streams16::new(k),
         ray: Rays16 {
             origin: zero3,
             dir: zero3,
@@ -166,37 +163,12 @@ fn render_tile_avx512(
         depth: U32x16::splat(k, 0),
     };
     loop {
-        // Free lanes take the next samples, as far as the ring has room;
-        // their streams and camera rays are those of the scalar tile loop.
+        // Free lanes take the next samples, as far as the ring has room.
+        let next_seq = queue.started();
         let room = (total - next_seq).min(committed + RING as u64 - next_seq);
-        let mut fill = Mask16::NONE;
-        let (mut origins, mut dirs) = ([Vec3::ZERO; LANES], [Vec3::ZERO; LANES]);
-        for lane in (!paths.active).lanes().take(room as usize) {
-            fill.0 |= 1 << lane;
-            queued[lane] = next_seq;
-            next_seq += 1;
-            let (pixel, sample) = next;
-            next = if sample + 1 < opts.spp {
-                (pixel, sample + 1)
-            } else {
-                (pixel + 1, 0)
-            };
-            let pixel = pixel as usize;
-            let camera = camera_sample(&film_rays, &keys[pixel], pixels[pixel], sample);
-            paths.streams.start(lane, &camera.sampler, DIM_FIRST_BOUNCE);
-            (origins[lane], dirs[lane]) = (camera.ray.origin, camera.ray.dir);
-        }
+        let fill = (!paths.active).first_of(room.min(LANES as u64) as u32);
         if fill.any() {
-            let (origin, dir) = (
-                Vec3x16::from_lanes(k, &origins),
-                Vec3x16::from_lanes(k, &dirs),
-            );
-            paths.ray = Rays16 {
-                origin: Vec3x16::select(fill, origin, paths.ray.origin),
-                dir: Vec3x16::select(fill, dir, paths.ray.dir),
-                t_min: F32x16::select(fill, zero, paths.ray.t_min),
-                t_max: F32x16::select(fill, F32x16::splat(k, f32::INFINITY), paths.ray.t_max),
-            };
+            queue.start(k, fill, &mut paths.streams, &mut paths.ray, &mut queued);
             paths.beta = Vec3x16::select(fill, Vec3x16::splat(k, Vec3::ONE), paths.beta);
             paths.radiance = Vec3x16::select(fill, zero3, paths.radiance);
             paths.eta_scale = F32x16::select(fill, F32x16::splat(k, 1.0), paths.eta_scale);
@@ -225,7 +197,7 @@ fn render_tile_avx512(
             done[slot] = true;
         }
         // Samples finished in queue order join their pixel's sum.
-        while committed < next_seq && done[(committed % RING as u64) as usize] {
+        while committed < queue.started() && done[(committed % RING as u64) as usize] {
             let slot = (committed % RING as u64) as usize;
             done[slot] = false;
             sum += ring[slot];
