@@ -10,7 +10,7 @@ use crate::camera::FilmRays;
 use crate::ray::Rays16;
 use crate::sampler::BLOCK;
 use crate::sampler::wide::{Streams16, TileKeys};
-use crate::simd::{Avx512, F32x16, LANES, Mask16, U32x16, U64x16};
+use crate::simd::{Avx512, F32x16, LANES, Mask16, U32x16, U64x16, Vec3x16};
 
 /// A batch of started samples, by field and lane, for expanding loads.
 #[derive(Clone, Debug)]
@@ -19,8 +19,6 @@ struct Batch {
     key: [u64; LANES],
     /// Their first bounce blocks, by dimension.
     first: [[f32; LANES]; BLOCK],
-    /// Their camera rays' origins, by axis.
-    origin: [[f32; LANES]; 3],
     /// Their camera rays' directions, by axis.
     dir: [[f32; LANES]; 3],
     /// Samples in the batch.
@@ -63,7 +61,6 @@ impl Queue {
             batch: Batch {
                 key: [0; LANES],
                 first: [[0.0; LANES]; BLOCK],
-                origin: [[0.0; LANES]; 3],
                 dir: [[0.0; LANES]; 3],
                 len: 0,
                 taken: 0,
@@ -112,12 +109,9 @@ impl Queue {
             for (number, drawn) in streams.first.iter_mut().zip(&b.first) {
                 *number = number.expand_from(take, &drawn[at..]);
             }
-            let (o, d) = (&mut ray.origin, &mut ray.dir);
-            (o.x, o.y, o.z) = (
-                o.x.expand_from(take, &b.origin[0][at..]),
-                o.y.expand_from(take, &b.origin[1][at..]),
-                o.z.expand_from(take, &b.origin[2][at..]),
-            );
+            // Camera rays share the camera's position.
+            ray.origin = Vec3x16::select(take, k.vec3(self.film_rays.origin()), ray.origin);
+            let d = &mut ray.dir;
             (d.x, d.y, d.z) = (
                 d.x.expand_from(take, &b.dir[0][at..]),
                 d.y.expand_from(take, &b.dir[1][at..]),
@@ -152,17 +146,12 @@ impl Queue {
             F32x16::gather(&self.film[0], pixel, m, zero) + starts.film[0],
             F32x16::gather(&self.film[1], pixel, m, zero) + starts.film[1],
         ];
-        let (origin, dir) = self.film_rays.rays16(k, film);
+        let dir = self.film_rays.rays16(k, film);
         let b = &mut self.batch;
         b.key = U64x16::to_array(starts.key);
         for (out, number) in b.first.iter_mut().zip(starts.first) {
             *out = number.to_array();
         }
-        b.origin = [
-            origin.x.to_array(),
-            origin.y.to_array(),
-            origin.z.to_array(),
-        ];
         b.dir = [dir.x.to_array(), dir.y.to_array(), dir.z.to_array()];
         (b.len, b.taken) = (len, 0);
     }
