@@ -17,6 +17,9 @@
 //! them: the walks without the shading between them, on the ray
 //! distribution of the path tracer itself. The walks are compiled as the
 //! render's tile loop is (`Accel::closest_hit`: AVX2 where the CPU has it).
+//! Each set is then walked again by the batch walks (`Accel::closest_hits`,
+//! `Accel::occluded_rays`: sixteen rays at a time where the CPU has
+//! AVX-512), reported beside the scalar rate.
 //!
 //! Each run walks its ray set again until 0.2 s have passed and reports
 //! the time per pass (a render's camera rays alone take a few

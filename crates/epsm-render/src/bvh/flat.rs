@@ -249,21 +249,35 @@ impl FlatBvh {
     /// before each packet test, so `ray` may come
     /// [`TraceRay::without_shear`].
     #[inline(always)]
-    #[allow(unsafe_code)]
     pub fn trace<const ANY: bool>(
         &self,
         ray: &mut TraceRay,
         boxes: impl BoxTest,
     ) -> Option<FlatHit> {
-        if self.nodes.is_empty() {
+        self.trace_from::<ANY>(0, ray, boxes)
+    }
+
+    /// [`FlatBvh::trace`] of the subtree under node `start` (a node index,
+    /// as in [`FlatBvh::node_parts`]; the packet walk of module `wide`
+    /// hands a subtree that few of its rays enter to this walk, ray by
+    /// ray).
+    #[inline(always)]
+    #[allow(unsafe_code)]
+    pub fn trace_from<const ANY: bool>(
+        &self,
+        start: usize,
+        ray: &mut TraceRay,
+        boxes: impl BoxTest,
+    ) -> Option<FlatHit> {
+        if start >= self.nodes.len() {
             return None;
         }
         let mut best = None;
         let mut stack = [MaybeUninit::<(u32, f32)>::uninit(); STACK];
         let mut depth = 0usize;
-        let mut node = 0usize;
+        let mut node = start;
         loop {
-            // SAFETY: `node` is the root (`nodes` is not empty) or a child
+            // SAFETY: `node` is `start` (below `nodes.len()`) or a child
             // index of a node, below `nodes.len()` (asserted by
             // `FlatBvh::new`; nothing changes the nodes after).
             let n = unsafe { self.nodes.get_unchecked(node) };

@@ -22,6 +22,13 @@
 //! code of scenes without spheres carries nothing of theirs. More spheres
 //! stand behind the top level like any instance.
 //!
+//! Many rays at once ([`Accel::closest_hits`], [`Accel::occluded_rays`],
+//! [`Accel::surface_points`], module `batch`) are traced sixteen at a time
+//! where the CPU has AVX-512 (module `wide`: the static BVH walked as a
+//! packet from tables built beside it, the listed spheres in `f64` lanes,
+//! instances lane by lane by the scalar code), with the scalar walks'
+//! answers (but for ties, module `wide`).
+//!
 //! Moving an object ([`Accel::update_instance`]) re-reads its transform and
 //! rebuilds only the top level; the first move of a static object makes it
 //! dynamic, which rebuilds the static BVH once without it

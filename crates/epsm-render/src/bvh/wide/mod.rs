@@ -7,33 +7,49 @@
 //! Model: the scalar trace's steps with a lane per ray. The listed exact
 //! spheres are tested first in `f64` lanes (module `spheres`), as the
 //! tracer's `SpheresFirst` walk does, and kept aside. The static BVH is
-//! walked as a packet (module `walk`): at each node the lanes that reached
-//! it are tested against each child box (module `tree`), and a leaf child's
-//! triangles against the lanes that enter its box by the watertight test
-//! per lane (module `triangles`), each lane with its own closest `t` and
-//! triangle. A sphere then wins a lane whose static hit is no closer
-//! (`t_sphere ≤ t_triangle`: the scalar rule that a listed sphere wins a
-//! tie). Instances behind the top level (dynamic objects, instanced large
-//! meshes, scenes with more than two exact spheres) are walked per lane by
-//! the scalar code itself (`Accel::trace_instances`), starting from the
-//! lane's best hit so far, as the scalar trace does after the static BVH.
-//! Occlusion runs the same steps, each lane leaving at its first hit.
+//! walked as a packet (module `walk`, over the layout of module `tree`): at
+//! each node the lanes that reached it are tested against each child box,
+//! and a leaf child's triangles against the lanes that enter its box by
+//! the watertight test per lane (module `triangles`), one triangle against
+//! all those lanes or, where few lanes enter each leaf, each lane its own
+//! list in rounds (module `leaves`), each lane keeping its own closest `t`
+//! and triangle (module `closest`); a node that few lanes enter is walked
+//! lane by lane by the scalar walk. A sphere then wins a lane whose static
+//! hit is no closer (`t_sphere ≤ t_triangle`: the scalar rule that a listed
+//! sphere wins a tie). Instances behind the top level (dynamic objects,
+//! instanced large meshes, scenes with more than two exact spheres) are
+//! walked per lane by the scalar code itself (`Accel::trace_instances`,
+//! module `lanes`), starting from the lane's best hit so far, as the scalar
+//! trace does after the static BVH. Occlusion runs the same steps, each
+//! lane leaving at its first hit. Shading points come from tables of the
+//! static triangles and from the listed spheres' placements in lanes
+//! (module `points`), others per lane from the scalar code.
 //!
 //! Every lane's tests round exactly as the scalar ones (the same operations
 //! in the same order, `f64` where the scalar code uses it), so a lane finds
 //! every hit the scalar walk finds, with the same `t`, barycentrics and
 //! ids. The one difference: two primitives hit at the same `t` (to within
-//! the rounding of the range tests against the `t_max` a walk carries, as
-//! for a ray through an edge shared by two triangles). The scalar walk
-//! keeps the one its visiting order meets first (or last), and the packet
-//! visits nodes in its own order, so it may report the other. Occlusion
-//! has no such case (any hit will do), nor has a sphere tying with a
-//! triangle (the sphere wins both ways). The tests count these ties; there
-//! are none in their random scenes.
+//! the rounding of the range tests against the `t_max` a walk carries), in
+//! different nodes of the static BVH, as for a ray through a vertex shared
+//! by triangles in two leaves. The scalar walk keeps the one its visiting
+//! order meets last, and the packet visits nodes in its own order, so it
+//! may report the other. Within a node the scalar packet test's rule is
+//! kept (so a BVH of one node, as `scenes/cornell-box.toml`'s, has no such
+//! difference); occlusion has none (any hit will do), nor has a sphere
+//! tying with a triangle (the sphere wins both ways). The tests count these
+//! ties: none on the rays of renders of the shipped scenes, 2 of 40 k lanes
+//! in their random scenes, all on rays aimed at vertices.
+//!
+//! The tables (module `tree`: 64 bytes per static triangle and 704 per
+//! node with up to sixteen leaf triangles; module `points`: 128 bytes per
+//! static triangle) are built with the static BVH, on x86-64 only.
 //!
 //! No parameters.
 
 mod affine;
+mod closest;
+mod lanes;
+mod leaves;
 mod points;
 mod rays;
 mod spheres;
@@ -44,22 +60,20 @@ mod walk;
 #[cfg(test)]
 mod tests;
 
-use glam::{Vec3, Vec3A};
-
-use super::flat::{FlatBvh, FlatHit};
-use super::node::{Avx, TraceRay};
+use super::Accel;
+use super::NO_WORLD_INDEX;
+use super::flat::FlatBvh;
 use super::shading::ShadingTriangle;
 use super::world::TriangleRef;
-use super::{Accel, Found, NO_WORLD_INDEX};
-use crate::frame::Frame;
-use crate::hit::{Hit, Hits16, SurfacePoint, SurfacePoints16, TexCoords};
-use crate::ray::{Ray, Rays16};
+use crate::hit::{Hits16, SurfacePoints16};
+use crate::ray::Rays16;
 use crate::scene::Object;
-use crate::simd::{Avx512, F32x16, LANES, Mask16, U32x16};
+use crate::simd::{Avx512, F32x16, Mask16, U32x16};
+use closest::Closest16;
 use points::ShadingTable;
 use rays::RayLanes;
 use tree::Tree16;
-use walk::Closest16;
+use walk::Policy;
 
 /// The static BVH's tables for sixteen rays at a time.
 #[derive(Clone, Debug)]
@@ -97,6 +111,18 @@ impl Accel {
     /// (but for ties, module docs); other lanes: `found` unset.
     #[inline(always)]
     pub(crate) fn closest_hits16(&self, k: Avx512, rays: &Rays16, active: Mask16) -> Hits16 {
+        self.closest_hits16_by(k, rays, active, Policy::MEASURED)
+    }
+
+    /// [`Accel::closest_hits16`] with the static BVH walked by `policy`.
+    #[inline(always)]
+    fn closest_hits16_by(
+        &self,
+        k: Avx512,
+        rays: &Rays16,
+        active: Mask16,
+        policy: Policy,
+    ) -> Hits16 {
         let lanes = RayLanes::new(k, rays);
         let spheres = if self.listed.is_empty() {
             None
@@ -116,7 +142,8 @@ impl Accel {
         };
         if let Some(world) = self.world.as_deref() {
             let w = &world.wide;
-            w.tree.walk::<false>(&lanes, active, &mut best);
+            w.tree
+                .walk::<false>(&world.bvh, &lanes, active, &mut best, policy);
             hits = Hits16 {
                 found: best.found,
                 object: U32x16::gather(&w.objects, best.id, best.found, zero),
@@ -141,9 +168,9 @@ impl Accel {
             };
         }
         if !self.tlas.slots.is_empty() && active.any() {
-            let (rays, best) = (ray_lanes(rays), hit_lanes(&hits));
+            let (rays, best) = (lanes::ray_lanes(rays), lanes::hit_lanes(&hits));
             let lanes = std::array::from_fn(|i| (active.test(i), rays[i], best[i]));
-            hits = Hits16::from_lanes(k, &self.instances_per_lane::<false>(k, lanes));
+            hits = Hits16::from_lanes(k, &self.instances_per_lane::<false>(k, &lanes));
         }
         hits
     }
@@ -152,6 +179,12 @@ impl Accel {
     /// lanes unset.
     #[inline(always)]
     pub(crate) fn occluded16(&self, k: Avx512, rays: &Rays16, active: Mask16) -> Mask16 {
+        self.occluded16_by(k, rays, active, Policy::MEASURED)
+    }
+
+    /// [`Accel::occluded16`] with the static BVH walked by `policy`.
+    #[inline(always)]
+    fn occluded16_by(&self, k: Avx512, rays: &Rays16, active: Mask16, policy: Policy) -> Mask16 {
         let lanes = RayLanes::new(k, rays);
         let mut occluded = Mask16::NONE;
         if !self.listed.is_empty() {
@@ -159,17 +192,18 @@ impl Accel {
         }
         if let Some(world) = self.world.as_deref() {
             let mut best = Closest16::none(&lanes);
+            let left = active.and_not(occluded);
             world
                 .wide
                 .tree
-                .walk::<true>(&lanes, active.and_not(occluded), &mut best);
+                .walk::<true>(&world.bvh, &lanes, left, &mut best, policy);
             occluded = occluded | best.found;
         }
         let rest = active.and_not(occluded);
         if !self.tlas.slots.is_empty() && rest.any() {
-            let rays = ray_lanes(rays);
+            let rays = lanes::ray_lanes(rays);
             let lanes = std::array::from_fn(|i| (rest.test(i), rays[i], None));
-            let found = self.instances_per_lane::<true>(k, lanes);
+            let found = self.instances_per_lane::<true>(k, &lanes);
             for (lane, hit) in found.iter().enumerate() {
                 occluded.0 |= u16::from(hit.is_some()) << lane;
             }
@@ -218,97 +252,11 @@ impl Accel {
         }
         let rest = hits.found.and_not(done);
         if rest.any() {
-            let lanes = hit_lanes(hits);
+            let lanes = lanes::hit_lanes(hits);
             let lanes = std::array::from_fn(|i| lanes[i].filter(|_| rest.test(i)));
-            let scalar = SurfacePoints16::from_lanes(k, &self.points_per_lane(objects, lanes));
+            let scalar = SurfacePoints16::from_lanes(k, &self.points_per_lane(k, objects, &lanes));
             out = points::select(rest, &scalar, &out);
         }
         out
     }
-
-    /// The scalar top-level walk per lane: for each `(active, ray, best)`
-    /// with `active`, the trace's hit from its best hit so far on; `None`
-    /// for the others.
-    #[inline(never)]
-    fn instances_per_lane<const ANY: bool>(
-        &self,
-        k: Avx512,
-        lanes: [(bool, Ray, Option<Hit>); LANES],
-    ) -> [Option<Hit>; LANES] {
-        let boxes = Avx::from_avx512(k);
-        lanes.map(|(active, ray, best)| {
-            if !active {
-                return None;
-            }
-            let t_max = best.map_or(ray.t_max, |h| h.t);
-            let (origin, dir) = (Vec3A::from(ray.origin), Vec3A::from(ray.dir));
-            let mut world = TraceRay::for_walk::<ANY>(origin, dir, ray.t_min, t_max);
-            let found = match best {
-                None => Found::Nothing,
-                Some(h) if h.world_index == NO_WORLD_INDEX => Found::Instance(h.object),
-                Some(_) => self.world.as_deref().map_or(Found::Nothing, Found::World),
-            };
-            let flat = best.map(|h| FlatHit {
-                id: if h.world_index == NO_WORLD_INDEX {
-                    h.triangle
-                } else {
-                    h.world_index
-                },
-                t: h.t,
-                b1: h.b1,
-                b2: h.b2,
-            });
-            self.trace_instances::<ANY>(&mut world, found, flat, boxes)
-        })
-    }
-
-    /// [`Accel::surface_point`] of each hit (a placeholder point for
-    /// `None`).
-    #[inline(never)]
-    fn points_per_lane(
-        &self,
-        objects: &[Object],
-        hits: [Option<Hit>; LANES],
-    ) -> [SurfacePoint; LANES] {
-        hits.map(|hit| match hit {
-            Some(hit) => self.surface_point(objects, &hit),
-            None => SurfacePoint {
-                p: Vec3::ZERO,
-                ng: Vec3::Z,
-                uv: TexCoords::Uv(glam::Vec2::ZERO),
-                frame: Frame::from_normal(Vec3::Z),
-            },
-        })
-    }
-}
-
-/// The rays of the lanes (for the per-lane fallbacks).
-#[inline(always)]
-fn ray_lanes(rays: &Rays16) -> [Ray; LANES] {
-    let (origin, dir) = (rays.origin.to_lanes(), rays.dir.to_lanes());
-    let (t_min, t_max) = (rays.t_min.to_array(), rays.t_max.to_array());
-    std::array::from_fn(|i| Ray {
-        origin: origin[i],
-        dir: dir[i],
-        t_min: t_min[i],
-        t_max: t_max[i],
-    })
-}
-
-/// The hits of the lanes (`None` outside `found`).
-#[inline(always)]
-fn hit_lanes(hits: &Hits16) -> [Option<Hit>; LANES] {
-    let (object, triangle) = (hits.object.to_array(), hits.triangle.to_array());
-    let (b1, b2, t) = (hits.b1.to_array(), hits.b2.to_array(), hits.t.to_array());
-    let world_index = hits.world_index.to_array();
-    std::array::from_fn(|i| {
-        hits.found.test(i).then_some(Hit {
-            object: object[i],
-            triangle: triangle[i],
-            b1: b1[i],
-            b2: b2[i],
-            t: t[i],
-            world_index: world_index[i],
-        })
-    })
 }

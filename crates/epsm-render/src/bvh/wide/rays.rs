@@ -13,9 +13,11 @@
 //! [`TraceRay`]: crate::bvh::node::TraceRay
 //! [`RayShear`]: crate::bvh::triangle::RayShear
 
+use super::lanes;
+use super::triangles::TestRays;
 use crate::bvh::node::TINY_DIR;
-use crate::ray::Rays16;
-use crate::simd::{Avx512, F32x16, U32x16, Vec3x16};
+use crate::ray::{Ray, Rays16};
+use crate::simd::{Avx512, F32x16, LANES, Mask16, U32x16, Vec3x16};
 
 /// Sixteen rays with their box-test and triangle-test constants.
 #[derive(Clone, Copy, Debug)]
@@ -29,18 +31,18 @@ pub(super) struct RayLanes {
     /// Reciprocals of the directions' components, each clamped to at least
     /// `TINY_DIR` in magnitude first (the scalar `clamped_recip`).
     pub inv_dir: Vec3x16,
-    /// Smallest accepted `t`.
-    pub t_min: F32x16,
     /// Largest accepted `t` (the rays' own; walks keep their lowered one).
     pub t_max: F32x16,
     /// `index[v][a]`: the position of vertex `v`'s coordinate along the
     /// lane's axis `[kx, ky, kz][a]` in a triangle's corner vector
     /// (`3·v + k`).
     pub index: [[U32x16; 3]; 3],
-    /// The origins' coordinates along `[kx, ky, kz]`.
-    pub origin_k: [F32x16; 3],
-    /// `(−Sx, −Sy, Sz)` per lane (`RayShear::kz_col`).
-    pub kz_col: [F32x16; 3],
+    /// `axis_is[a] = [k == 0, k == 1]` per lane for its axis
+    /// `k = [kx, ky, kz][a]`.
+    pub axis_is: [[Mask16; 2]; 3],
+    /// The triangle test's constants: the origins along `[kx, ky, kz]`,
+    /// `(−Sx, −Sy, Sz)` (`RayShear::kz_col`) and `t_min`.
+    pub test: TestRays,
 }
 
 /// Per lane, `x`, `y` or `z` by axis `axis` (0, 1 or 2).
@@ -97,19 +99,37 @@ impl RayLanes {
                 clamped_recip(k, d.y),
                 clamped_recip(k, d.z),
             ),
-            t_min: rays.t_min,
             t_max: rays.t_max,
             index: [
                 [kx, ky, kz],
                 [kx + three, ky + three, kz + three],
                 [kx + six, ky + six, kz + six],
             ],
-            origin_k: [
-                along(k, kx, rays.origin),
-                along(k, ky, rays.origin),
-                along(k, kz, rays.origin),
+            axis_is: [
+                [kx.eq(zero), kx.eq(one)],
+                [ky.eq(zero), ky.eq(one)],
+                [kz.eq(zero), kz.eq(one)],
             ],
-            kz_col: [-(along(k, kx, d) * sz), -(along(k, ky, d) * sz), sz],
+            test: TestRays {
+                origin_k: [
+                    along(k, kx, rays.origin),
+                    along(k, ky, rays.origin),
+                    along(k, kz, rays.origin),
+                ],
+                kz_col: [-(along(k, kx, d) * sz), -(along(k, ky, d) * sz), sz],
+                t_min: rays.t_min,
+            },
         }
+    }
+
+    /// The rays as plain values (for the per-lane fallbacks).
+    #[inline(always)]
+    pub fn plain(&self) -> [Ray; LANES] {
+        lanes::ray_lanes(&Rays16 {
+            origin: self.origin,
+            dir: self.dir,
+            t_min: self.test.t_min,
+            t_max: self.t_max,
+        })
     }
 }

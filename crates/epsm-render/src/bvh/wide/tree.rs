@@ -1,7 +1,8 @@
 //! The static BVH laid out for sixteen rays at a time: the nodes of its
 //! [`FlatBvh`] (same indices, same child boxes, same triangles per leaf)
-//! with each leaf child's triangles as a run of [`Corners`], and the slab
-//! test of one child box against sixteen rays.
+//! with each leaf child's triangles as a run of [`Corners`], each node's
+//! (up to sixteen) leaf triangles also as a [`Table`] by field, and the
+//! slab test of one child box against sixteen rays.
 //!
 //! Model: the scalar walk tests one ray against a node's eight boxes at
 //! once; here one box is tested against sixteen rays at once, each lane by
@@ -14,7 +15,9 @@
 //! child), in packet order, each tagged with its half-packet (for the
 //! scalar packet test's rule among equal `t`); each is one 64-byte record
 //! holding its nine coordinates ([`Corners`]), loaded whole and permuted
-//! per lane.
+//! per lane, and a node's table holds the same coordinates, ids and
+//! half-packets by field, sixteen triangles to a row, for per-lane picks by
+//! permutes (module `leaves`).
 //!
 //! No parameters.
 
@@ -38,6 +41,30 @@ pub(super) struct Node16 {
     pub leaves: u8,
     /// Bit `c` set when child `c` is an inner node.
     pub inner: u8,
+    /// The first of the leaf children's triangles (all consecutive).
+    pub base: u32,
+    /// The index in [`Tree16::tables`] of the leaf triangles' table, or
+    /// [`NO_TABLE`] (no leaf triangles, or more than sixteen).
+    pub table: u32,
+    /// Per child slot (with a table): bit `i` set when triangle `base + i`
+    /// belongs to that leaf child.
+    pub bits: [u16; 8],
+}
+
+/// [`Node16::table`] of a node without a table.
+pub(super) const NO_TABLE: u32 = u32::MAX;
+
+/// A node's leaf triangles (up to sixteen, in order) by field, triangle
+/// `base + i` in lane `i`, so a permute by `i` picks sixteen lanes' own.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+pub(super) struct Table {
+    /// `coords[3·v + a]`: coordinate `a` of vertex `v`.
+    pub coords: [[f32; 16]; 9],
+    /// The caller's ids ([`Tree16::ids`]).
+    pub ids: [u32; 16],
+    /// The half-packets ([`Tree16::groups`]).
+    pub groups: [u32; 16],
 }
 
 /// A triangle's vertices `[p0.x, p0.y, p0.z, p1.x, … p2.z]` and seven zeros:
@@ -55,6 +82,8 @@ pub(super) struct Tree16 {
     pub corners: Vec<Corners>,
     /// The caller's id of each triangle (as in the [`FlatBvh`]).
     pub ids: Vec<u32>,
+    /// The tables of the nodes with one to sixteen leaf triangles.
+    pub tables: Vec<Table>,
     /// The half-packet of the [`FlatBvh`] each triangle is in (a number
     /// per half, in the scalar walk's test order within a node): the
     /// scalar packet test keeps the first of equal `t` within a half, and
@@ -83,6 +112,9 @@ impl Tree16 {
                 count: [0; 8],
                 leaves: parts.leaves,
                 inner: parts.inner,
+                base: tree.corners.len() as u32,
+                table: NO_TABLE,
+                bits: [0; 8],
             };
             for child in 0..8 {
                 let b = parts.boxes.child(child);
@@ -112,6 +144,26 @@ impl Tree16 {
                     .push(2 * (packets + p as u32) + u32::from(l >= LANES / 2));
             }
             packets += parts.packets.len() as u32;
+            let base = node.base as usize;
+            if (1..=16).contains(&(tree.corners.len() - base)) {
+                let mut table = Table {
+                    coords: [[0.0; 16]; 9],
+                    ids: [0; 16],
+                    groups: [0; 16],
+                };
+                for (i, corners) in tree.corners[base..].iter().enumerate() {
+                    for (c, column) in table.coords.iter_mut().enumerate() {
+                        column[i] = corners.0[c];
+                    }
+                    (table.ids[i], table.groups[i]) = (tree.ids[base + i], tree.groups[base + i]);
+                }
+                for child in (0..8).filter(|&c| node.leaves & (1 << c) != 0) {
+                    let first = node.first[child] - node.base;
+                    node.bits[child] = (((1u32 << node.count[child]) - 1) << first) as u16;
+                }
+                node.table = tree.tables.len() as u32;
+                tree.tables.push(table);
+            }
             tree.nodes.push(node);
         }
         tree
@@ -119,7 +171,9 @@ impl Tree16 {
 
     /// Approximate heap size in bytes.
     pub fn bytes(&self) -> usize {
-        self.nodes.len() * size_of::<Node16>() + self.corners.len() * (size_of::<Corners>() + 8)
+        self.nodes.len() * size_of::<Node16>()
+            + self.corners.len() * (size_of::<Corners>() + 8)
+            + self.tables.len() * size_of::<Table>()
     }
 }
 
@@ -134,7 +188,7 @@ impl Node16 {
         let (x0, x1) = slab(k, x[0][child], x[1][child], rays.origin.x, rays.inv_dir.x);
         let (y0, y1) = slab(k, y[0][child], y[1][child], rays.origin.y, rays.inv_dir.y);
         let (z0, z1) = slab(k, z[0][child], z[1][child], rays.origin.z, rays.inv_dir.z);
-        let t0 = x0.max(y0).max(z0).max(rays.t_min);
+        let t0 = x0.max(y0).max(z0).max(rays.test.t_min);
         let t1 = (x1.min(y1).min(z1) * F32x16::splat(k, EXIT_SCALE)).min(t_max);
         Entered {
             lanes: t0.le(t1),

@@ -1,22 +1,28 @@
-//! One triangle against sixteen rays: the watertight test of
-//! `PackedTriangle::intersect` (module `triangle`) with one ray per lane.
+//! One triangle against sixteen rays, or sixteen (ray, triangle) pairs:
+//! the watertight test of `PackedTriangle::intersect` (module `triangle`)
+//! with one ray per lane.
 //!
 //! Model: Woop, Benthin and Wald (JCGT 2013) as the scalar test does it,
-//! operation for operation: each lane shears the vertices relative to its
-//! own origin along its own axes (`v[kx] − o[kx] + (−Sx)·(v[kz] − o[kz])`,
-//! …), evaluates the edge functions `U, V, W`, recomputes all three in
-//! `f64` where one rounds to exactly zero (here in `f64` lanes, which round
-//! as the scalar `f64` code), rejects mixed signs, runs the range tests
-//! before the division (`t_min·det ≤ T ≤ t_max·det` on the sign-flipped
-//! `T`) and after it (`t` finite and in `[t_min, t_max]`), and gives
-//! `t = T/det`, `(b1, b2) = (V, W)/det` by the same reciprocal. A lane's hit
-//! is therefore exactly the scalar test's for its ray and `t_max`.
+//! operation for operation: each lane shears its triangle's vertices
+//! relative to its own origin along its own axes
+//! (`v[kx] − o[kx] + (−Sx)·(v[kz] − o[kz])`, …), evaluates the edge
+//! functions `U, V, W`, recomputes all three in `f64` where one rounds to
+//! exactly zero (here in `f64` lanes, which round as the scalar `f64`
+//! code), rejects mixed signs (by the comparisons there, by the sign bits
+//! when no edge function is zero, which is the same test), runs the range
+//! tests before the division (`t_min·det ≤ T ≤ t_max·det` on the
+//! sign-flipped `T`) and after it (`t` finite and in `[t_min, t_max]`), and
+//! gives `t = T/det`, `(b1, b2) = (V, W)/det` by the same reciprocal. A
+//! lane's hit is therefore exactly the scalar test's for its ray, triangle
+//! and `t_max`. The vertices come per lane along the lane's axes: permuted
+//! out of one triangle's corner vector ([`hit_triangle`]), or gathered from
+//! each lane's own triangle (module `pairs`).
 //!
 //! No parameters.
 
 use super::rays::RayLanes;
 use super::tree::Corners;
-use crate::simd::{F32x16, Mask16, U32x16};
+use crate::simd::{Avx512, F32x16, Mask16, U32x16};
 
 /// The lanes that hit a triangle, with their `t` and barycentrics.
 #[derive(Clone, Copy, Debug)]
@@ -31,6 +37,21 @@ pub(super) struct TriangleHits {
     pub b2: F32x16,
 }
 
+/// Per lane, the ray constants of the test (a packet's rays, or the rays
+/// of a chunk of (ray, triangle) pairs).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct TestRays {
+    /// The origins' coordinates along `[kx, ky, kz]`.
+    pub origin_k: [F32x16; 3],
+    /// `(−Sx, −Sy, Sz)`.
+    pub kz_col: [F32x16; 3],
+    /// Smallest accepted `t`.
+    pub t_min: F32x16,
+}
+
+/// A vertex's coordinates along each lane's `[kx, ky, kz]`.
+pub(super) type Along = [F32x16; 3];
+
 /// A vertex relative to each lane's origin, sheared: `[x, y]` across the
 /// ray, `z` along it.
 type Sheared = [F32x16; 3];
@@ -44,27 +65,55 @@ pub(super) fn hit_triangle(
     t_max: F32x16,
     lanes: Mask16,
 ) -> TriangleHits {
-    let k = rays.k;
+    let p = F32x16::from_array(rays.k, corners.0);
+    let [ia, ib, ic] = &rays.index;
+    let vertices = [along(p, ia), along(p, ib), along(p, ic)];
+    watertight(rays.k, &rays.test, vertices, t_max, lanes)
+}
+
+/// The coordinates at positions `index` of the corner vector `p`.
+#[inline(always)]
+fn along(p: F32x16, index: &[U32x16; 3]) -> Along {
+    [
+        p.permute(index[0]),
+        p.permute(index[1]),
+        p.permute(index[2]),
+    ]
+}
+
+/// The watertight test of the triangle with vertices `[a, b, c]` (per lane,
+/// along the lane's axes) against the rays `rays` of `lanes`, `t` in
+/// `[rays.t_min, t_max]`.
+#[inline(always)]
+pub(super) fn watertight(
+    k: Avx512,
+    rays: &TestRays,
+    [a, b, c]: [Along; 3],
+    t_max: F32x16,
+    lanes: Mask16,
+) -> TriangleHits {
     let zero = F32x16::splat(k, 0.0);
-    let p = F32x16::from_array(k, corners.0);
-    let a = shear(p, &rays.index[0], rays);
-    let b = shear(p, &rays.index[1], rays);
-    let c = shear(p, &rays.index[2], rays);
+    let (a, b, c) = (shear(a, rays), shear(b, rays), shear(c, rays));
     let (mut u, mut v, mut w) = (edge(&c, &b), edge(&a, &c), edge(&b, &a));
     let on_edge = (u.eq(zero) | v.eq(zero) | w.eq(zero)) & lanes;
-    if on_edge.any() {
+    let mixed = if on_edge.any() {
         [u, v, w] = edges_f64(on_edge, [a, b, c], [u, v, w]);
-    }
-    let negative = u.lt(zero) | v.lt(zero) | w.lt(zero);
-    let positive = u.gt(zero) | v.gt(zero) | w.gt(zero);
+        let negative = u.lt(zero) | v.lt(zero) | w.lt(zero);
+        let positive = u.gt(zero) | v.gt(zero) | w.gt(zero);
+        negative & positive
+    } else {
+        // No zero edge function: mixed signs are differing sign bits (a
+        // NaN lane, whatever its bits, fails `den > 0` below).
+        let (ub, vb, wb) = (u.to_bits(), v.to_bits(), w.to_bits());
+        ((ub | vb | wb) ^ (ub & vb & wb)).ge(U32x16::splat(k, 0x8000_0000))
+    };
     let det = u + v + w;
     // The scalar `flip`: negate where `det`'s sign bit is set.
     let sign = det.to_bits() & U32x16::splat(k, 0x8000_0000);
     let t_num = flip(u * a[2] + v * b[2] + w * c[2], sign);
     let den = det.abs();
-    let in_range =
-        den.gt(zero) & t_num.ge(rays.t_min * den) & t_num.le(t_max * den) & !(negative & positive);
-    let mut hit = in_range & lanes;
+    let in_range = den.gt(zero) & t_num.ge(rays.t_min * den) & t_num.le(t_max * den);
+    let mut hit = in_range.and_not(mixed) & lanes;
     if !hit.any() {
         return TriangleHits {
             lanes: hit,
@@ -84,19 +133,15 @@ pub(super) fn hit_triangle(
     }
 }
 
-/// The vertex at `index` (`[kx, ky, kz]` positions per lane) of the corner
-/// vector `p`, relative to each lane's origin, sheared:
-/// `(v[kx] − o[kx]) + (−Sx)·(v[kz] − o[kz])`, …, `Sz·(v[kz] − o[kz])`.
+/// The vertex `p` (along the lane's axes) relative to each lane's origin,
+/// sheared: `(p[kx] − o[kx]) + (−Sx)·(p[kz] − o[kz])`, …,
+/// `Sz·(p[kz] − o[kz])`.
 #[inline(always)]
-fn shear(p: F32x16, index: &[U32x16; 3], rays: &RayLanes) -> Sheared {
+fn shear(p: Along, rays: &TestRays) -> Sheared {
     let [ox, oy, oz] = rays.origin_k;
     let [nsx, nsy, sz] = rays.kz_col;
-    let z = p.permute(index[2]) - oz;
-    [
-        (p.permute(index[0]) - ox) + nsx * z,
-        (p.permute(index[1]) - oy) + nsy * z,
-        sz * z,
-    ]
+    let z = p[2] - oz;
+    [(p[0] - ox) + nsx * z, (p[1] - oy) + nsy * z, sz * z]
 }
 
 /// The edge function `p.x·q.y − p.y·q.x`.

@@ -4,16 +4,22 @@
 //! Model: the scalar walk of module `flat`, with a set of lanes in place of
 //! its one ray. At a node, each present child's box is tested against the
 //! node's lanes with the `t_max` each had on arriving (as the scalar walk
-//! tests the eight boxes once); then each leaf child's triangles are tested
-//! against the lanes that enter its box (each hit lowering that lane's
-//! `t_max`; among equal `t`, the scalar packet test's choice: the first
-//! within a half-packet, the later across halves), then the inner children
-//! entered by some lane not yet past its
-//! `t_max` are pushed, with their lanes and per-lane entry distances, on a
-//! stack sorted by their nearest entry, nearest on top. A popped node is
-//! visited by the lanes that entered it and whose `t_max` has not fallen
-//! below their entry since; it is skipped when none is left. With `ANY`
-//! (occlusion) a lane leaves the walk at its first hit.
+//! tests the eight boxes once); then the leaf children's triangles against
+//! the lanes that enter their boxes (module `leaves`; each hit lowering
+//! that lane's `t_max`), then the inner children entered by some lane not
+//! yet past its `t_max` are pushed, with their lanes and per-lane entry
+//! distances, on a stack sorted by their nearest entry, nearest on top. A
+//! popped node is visited by the lanes that entered it and whose `t_max`
+//! has not fallen below their entry since; it is skipped when none is
+//! left. With `ANY` (occlusion) a lane leaves the walk at its first hit.
+//!
+//! Incoherent rays soon part ways: on the continuation rays of
+//! `scenes/caustic-box.toml` a node is visited by 3 of the 16 lanes on
+//! average, and the packet walk alone lost to the scalar walk (7.4 against
+//! 10.4 M rays per CPU-second). So a node that few lanes enter
+//! ([`Policy::scalar_lanes`]) is handed to the scalar walk of its subtree
+//! (`FlatBvh::trace_from`), lane by lane, from the lane's current `t_max`
+//! (module `lanes`), as is a whole packet of so few lanes.
 //!
 //! So a lane's box tests, culls and triangle tests are the scalar ones on
 //! its ray with its current `t_max`; only the order of the nodes differs
@@ -30,46 +36,74 @@
 
 use std::mem::MaybeUninit;
 
+use super::closest::Closest16;
 use super::rays::RayLanes;
 use super::tree::Tree16;
-use super::triangles::hit_triangle;
-use crate::simd::{F32x16, Mask16, U32x16};
+use crate::bvh::flat::FlatBvh;
+use crate::simd::{F32x16, Mask16};
 
 /// Capacity of the traversal stack, in nodes.
 const STACK: usize = 128;
 
-/// Per lane, the closest hit found so far in a bottom-level BVH.
-#[derive(Clone, Copy, Debug)]
-pub(super) struct Closest16 {
-    /// Lanes with a hit.
-    pub found: Mask16,
-    /// The lane's `t_max`: its hit's `t` in `found`, else the ray's own.
-    pub t: F32x16,
-    /// Barycentric weight of `p1` (meaningful in `found`).
-    pub b1: F32x16,
-    /// Barycentric weight of `p2` (meaningful in `found`).
-    pub b2: F32x16,
-    /// The caller's id of the triangle hit (meaningful in `found`).
-    pub id: U32x16,
-    /// The half-packet of the triangle hit ([`Tree16::groups`]; `u32::MAX`
-    /// before a hit).
-    group: U32x16,
+/// How the packet walk divides its work. [`Policy::MEASURED`] is the one
+/// the wide functions use; the tests force each way with the others. Every
+/// way gives the same hits (but for ties, module `wide`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) struct Policy {
+    /// The cost of a round of a node's leaf triangles (module `leaves`)
+    /// relative to `triangle_cost`, that of one leaf triangle against all
+    /// lanes: a node's leaf triangles are tested in rounds when those cost
+    /// less.
+    pub round_cost: u32,
+    /// See `round_cost`.
+    pub triangle_cost: u32,
+    /// A node that at most this many lanes enter is walked lane by lane by
+    /// the scalar walk (`FlatBvh::trace_from`): its box and triangle tests
+    /// cost the same for one lane as for sixteen.
+    pub scalar_lanes: u32,
 }
 
-impl Closest16 {
-    /// No hit yet, rays ending at `t_max`.
-    #[inline(always)]
-    pub fn none(rays: &RayLanes) -> Self {
-        let zero = F32x16::splat(rays.k, 0.0);
-        Self {
-            found: Mask16::NONE,
-            t: rays.t_max,
-            b1: zero,
-            b2: zero,
-            id: U32x16::splat(rays.k, 0),
-            group: U32x16::splat(rays.k, u32::MAX),
-        }
-    }
+impl Policy {
+    /// The costs measured on the rays of renders of the shipped scenes
+    /// (`epsm bench rays --scene`, batched, one thread, best of 3 to 4
+    /// rounds on a shared machine): rounds weighed 6 : 5 against triangles
+    /// (continuation rays of `scenes/cornell-box.toml`: 50.7 M rays per
+    /// CPU-second, 32.7 with triangles alone, 50.9 with rounds always but
+    /// camera rays 81 against 84); subtrees that at most 6 lanes enter
+    /// walked lane by lane (continuation rays of `scenes/caustic-box.toml`:
+    /// 13.1 M rays per CPU-second, 11.0 without, 11.5, 12.1 and 13.4 at 2,
+    /// 4 and 8 lanes; on an 82 k-triangle sphere in that box 9.3 against
+    /// 6.1 without, 7.2 with every lane walked alone).
+    pub const MEASURED: Self = Self {
+        round_cost: 6,
+        triangle_cost: 5,
+        scalar_lanes: 6,
+    };
+
+    /// Every node's leaf triangles one by one against all lanes, no
+    /// subtree lane by lane.
+    #[cfg(test)]
+    pub const TRIANGLES: Self = Self {
+        round_cost: 1,
+        triangle_cost: 0,
+        scalar_lanes: 0,
+    };
+
+    /// Every node's leaf triangles in rounds where it has a table, no
+    /// subtree lane by lane.
+    #[cfg(test)]
+    pub const ROUNDS: Self = Self {
+        round_cost: 0,
+        triangle_cost: 1,
+        scalar_lanes: 0,
+    };
+
+    /// Subtrees that up to half the lanes enter lane by lane.
+    #[cfg(test)]
+    pub const HALF_SCALAR: Self = Self {
+        scalar_lanes: 8,
+        ..Self::MEASURED
+    };
 }
 
 /// A node waiting on the stack.
@@ -89,8 +123,22 @@ impl Tree16 {
     /// stops each lane at its first hit.
     #[inline(always)]
     #[allow(unsafe_code)]
-    pub fn walk<const ANY: bool>(&self, rays: &RayLanes, lanes: Mask16, best: &mut Closest16) {
+    pub fn walk<const ANY: bool>(
+        &self,
+        flat: &FlatBvh,
+        rays: &RayLanes,
+        lanes: Mask16,
+        best: &mut Closest16,
+        policy: Policy,
+    ) {
         if self.nodes.is_empty() || !lanes.any() {
+            return;
+        }
+        // The lanes' rays as plain values, made when a subtree is first
+        // walked lane by lane.
+        let mut plain = None;
+        if lanes.count() <= policy.scalar_lanes {
+            best.walk_lanes::<ANY>(flat, rays, 0, lanes, &mut plain);
             return;
         }
         let mut pending = [MaybeUninit::<Pending>::uninit(); STACK];
@@ -103,42 +151,9 @@ impl Tree16 {
             let n = &self.nodes[node];
             let t_node = best.t;
             // Leaf children: box tests, then their triangles.
-            let mut leaves = u32::from(n.leaves);
-            while leaves != 0 {
-                let child = leaves.trailing_zeros() as usize;
-                leaves &= leaves - 1;
-                let mut m = n.enter(child, rays, t_node).lanes & at & todo;
-                let first = n.first[child & 7] as usize;
-                let count = usize::from(n.count[child & 7]);
-                for i in first..first + count {
-                    if !m.any() {
-                        break;
-                    }
-                    let mut hit = hit_triangle(&self.corners[i], rays, best.t, m);
-                    let group = U32x16::splat(rays.k, self.groups[i]);
-                    if !ANY && hit.lanes.any() {
-                        // Equal `t` within a half-packet: the first stays.
-                        let tie = hit.t.eq(best.t) & best.group.eq(group);
-                        hit.lanes = hit.lanes.and_not(tie);
-                    }
-                    if !hit.lanes.any() {
-                        continue;
-                    }
-                    best.found = best.found | hit.lanes;
-                    best.t = F32x16::select(hit.lanes, hit.t, best.t);
-                    best.b1 = F32x16::select(hit.lanes, hit.b1, best.b1);
-                    best.b2 = F32x16::select(hit.lanes, hit.b2, best.b2);
-                    let id = U32x16::splat(rays.k, self.ids[i]);
-                    best.id = U32x16::select(hit.lanes, id, best.id);
-                    best.group = U32x16::select(hit.lanes, group, best.group);
-                    if ANY {
-                        todo = todo.and_not(hit.lanes);
-                        m = m.and_not(hit.lanes);
-                        if !todo.any() {
-                            return;
-                        }
-                    }
-                }
+            self.test_leaves::<ANY>(n, at, rays, best, &mut todo, policy);
+            if ANY && !todo.any() {
+                return;
             }
             // Inner children entered before `t_max`, sorted into the stack
             // above the entries of earlier nodes: nearest on top.
@@ -181,9 +196,18 @@ impl Tree16 {
                 let (next, entry) =
                     unsafe { (pending[depth].assume_init(), entries[depth].assume_init()) };
                 let m = next.lanes & todo & !entry.gt(best.t);
-                if m.any() {
+                if m.count() > policy.scalar_lanes {
                     (node, at) = (next.node as usize, m);
                     break;
+                }
+                if m.any() {
+                    best.walk_lanes::<ANY>(flat, rays, next.node as usize, m, &mut plain);
+                    if ANY {
+                        todo = todo.and_not(best.found);
+                        if !todo.any() {
+                            return;
+                        }
+                    }
                 }
             }
         }

@@ -10,6 +10,7 @@
 mod random;
 mod shipped;
 
+use super::walk::Policy;
 use crate::bvh::Accel;
 use crate::hit::{Hit, Hits16, SurfacePoint, TexCoords};
 use crate::ray::{Ray, Rays16};
@@ -37,7 +38,8 @@ struct Tally {
     sphere_hits: usize,
     /// Lanes occluded.
     occluded: usize,
-    /// Lanes whose closest hit differs from the scalar one by a tie.
+    /// Lanes whose closest hit differs from the scalar one by a tie (with
+    /// any policy).
     ties: usize,
     /// Shading points compared.
     points: usize,
@@ -90,8 +92,9 @@ fn point_bits(p: &SurfacePoint) -> Vec<u32> {
 }
 
 /// Compares the lanes `active` of the wide closest hits, occlusion and
-/// shading points of `rays` with the scalar functions; panics on a
-/// difference other than a tie, and returns the lanes with a tie.
+/// shading points of `rays`, with the static BVH walked by each
+/// [`Policy`], with the scalar functions; panics on a difference other
+/// than a tie, and returns the lanes with a tie.
 fn compare(
     k: Avx512,
     accel: &Accel,
@@ -102,32 +105,51 @@ fn compare(
 ) -> Mask16 {
     let mut ties = Mask16::NONE;
     let lanes = packet(k, rays);
-    let hits = accel.closest_hits16(k, &lanes, active);
-    let occluded = accel.occluded16(k, &lanes, active);
-    for (i, ray) in rays.iter().enumerate() {
-        if !active.test(i) {
-            assert!(
-                !hits.found.test(i) && !occluded.test(i),
-                "inactive lane {i}"
-            );
-            continue;
+    let scalar = rays.map(|ray| (accel.closest_hit(&ray), accel.occluded(&ray)));
+    for policy in POLICIES {
+        let hits = accel.closest_hits16_by(k, &lanes, active, policy);
+        let occluded = accel.occluded16_by(k, &lanes, active, policy);
+        for (i, ray) in rays.iter().enumerate() {
+            if !active.test(i) {
+                assert!(
+                    !hits.found.test(i) && !occluded.test(i),
+                    "inactive lane {i}"
+                );
+                continue;
+            }
+            let (wide, (closest, occludes)) = (hits.lane(i), scalar[i]);
+            let tie = same_or_tie(&wide, &closest).unwrap_or_else(|()| {
+                panic!("{policy:?} lane {i} {ray:?}: wide {wide:?}, scalar {closest:?}")
+            });
+            assert_eq!(occluded.test(i), occludes, "{policy:?} lane {i} {ray:?}");
+            ties.0 |= u16::from(tie) << i;
         }
-        let (wide, scalar) = (hits.lane(i), accel.closest_hit(ray));
-        let tie = same_or_tie(&wide, &scalar)
-            .unwrap_or_else(|()| panic!("lane {i} {ray:?}: wide {wide:?}, scalar {scalar:?}"));
-        assert_eq!(occluded.test(i), accel.occluded(ray), "lane {i} {ray:?}");
-        tally.rays += 1;
-        tally.ties += usize::from(tie);
-        ties.0 |= u16::from(tie) << i;
-        tally.hits += usize::from(scalar.is_some());
-        tally.occluded += usize::from(occluded.test(i));
-        let on_sphere = scalar
-            .is_some_and(|h| objects[h.object as usize].surface == crate::scene::Surface::Sphere);
-        tally.sphere_hits += usize::from(on_sphere);
+        if policy == Policy::MEASURED {
+            compare_points(k, accel, objects, &hits, tally);
+        }
     }
-    compare_points(k, accel, objects, &hits, tally);
+    for (i, (closest, occludes)) in scalar.iter().enumerate() {
+        if active.test(i) {
+            tally.rays += 1;
+            tally.ties += usize::from(ties.test(i));
+            tally.hits += usize::from(closest.is_some());
+            tally.occluded += usize::from(*occludes);
+            let on_sphere = closest.is_some_and(|h| {
+                objects[h.object as usize].surface == crate::scene::Surface::Sphere
+            });
+            tally.sphere_hits += usize::from(on_sphere);
+        }
+    }
     ties
 }
+
+/// The walks compared: the measured one, and each way forced.
+const POLICIES: [Policy; 4] = [
+    Policy::MEASURED,
+    Policy::TRIANGLES,
+    Policy::ROUNDS,
+    Policy::HALF_SCALAR,
+];
 
 /// Compares every found lane of the wide shading points of `hits` with the
 /// scalar ones, and again with some static hits' shading-table index

@@ -23,7 +23,7 @@ use epsm_testkit::Rng;
 /// vertex; texture coordinates when `uvs`.
 fn soup(rng: &mut Rng, count: usize, normals: usize, uvs: bool) -> Mesh {
     let mut mesh = Mesh::default();
-    let mut unit = |rng: &mut Rng| rng.unit().as_vec3();
+    let unit = |rng: &mut Rng| rng.unit().as_vec3();
     for i in 0..count {
         let a = rng.dvec3(-1.0, 1.0).as_vec3();
         let b = a + rng.dvec3(-0.4, 0.4).as_vec3();
@@ -127,7 +127,7 @@ fn scene(rng: &mut Rng, case: usize) -> (Vec<Object>, Vec<ObjectId>) {
         ));
     }
     for _ in 0..[0, 1, 2, 4][case % 4] {
-        let at = placement(rng, scale, case % 2 == 0);
+        let at = placement(rng, scale, case.is_multiple_of(2));
         objects.push(object(Mesh::default(), at, Surface::Sphere));
     }
     let dynamic = if case % 5 == 2 { vec![2] } else { vec![] };
@@ -160,10 +160,10 @@ fn ray(rng: &mut Rng, objects: &[Object], scale: f64, i: usize) -> Ray {
         _ => {}
     }
     let mut ray = Ray::new(origin, dir);
-    if i % 3 == 0 {
+    if i.is_multiple_of(3) {
         ray.t_max = rng.range(0.0, 3.0) as f32;
     }
-    if i % 7 == 0 {
+    if i.is_multiple_of(7) {
         ray.t_min = rng.range(0.0, 1.0) as f32;
     }
     ray
