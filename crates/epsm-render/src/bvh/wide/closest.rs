@@ -14,8 +14,7 @@ use super::lanes;
 use super::rays::RayLanes;
 use super::triangles::TriangleHits;
 use crate::bvh::flat::FlatBvh;
-use crate::ray::Ray;
-use crate::simd::{F32x16, LANES, Mask16, U32x16};
+use crate::simd::{F32x16, Mask16, U32x16};
 
 /// Per lane, the closest hit found so far in a bottom-level BVH.
 #[derive(Clone, Copy, Debug)]
@@ -80,7 +79,7 @@ impl Closest16 {
         rays: &RayLanes,
         node: usize,
         lanes: Mask16,
-        plain: &mut Option<[Ray; LANES]>,
+        plain: &mut Option<lanes::PlainRays>,
     ) {
         if plain.is_none() {
             *plain = Some(rays.plain());

@@ -38,14 +38,14 @@ pub(super) fn with_avx512<R>(_: Avx512, f: impl FnOnce() -> R) -> R {
 }
 
 /// The scalar walk of the subtree under `node` of `flat` for each lane of
-/// `lanes`, its ray `rays[i]` ending at `t_max[i]`: the lane's hit there.
+/// `lanes`, its ray `rays.lane(i)` ending at `t_max[i]`: the lane's hit there.
 #[inline(never)]
 pub(super) fn subtrees<const ANY: bool>(
     k: Avx512,
     flat: &FlatBvh,
     node: usize,
     lanes: Mask16,
-    rays: &[Ray; LANES],
+    rays: &PlainRays,
     t_max: &[f32; LANES],
 ) -> [Option<FlatHit>; LANES] {
     with_avx512(
@@ -55,7 +55,7 @@ pub(super) fn subtrees<const ANY: bool>(
             let boxes = Avx::from_avx512(k);
             let mut hits = [None; LANES];
             for lane in lanes.lanes() {
-                let ray = &rays[lane];
+                let ray = rays.lane(lane);
                 let (origin, dir) = (Vec3A::from(ray.origin), Vec3A::from(ray.dir));
                 let mut walk = TraceRay::for_walk::<ANY>(origin, dir, ray.t_min, t_max[lane]);
                 hits[lane] = flat.trace_from::<ANY>(node, &mut walk, boxes);
@@ -147,17 +147,40 @@ impl Accel {
     }
 }
 
-/// The rays of the lanes, as plain values.
-#[inline(always)]
-pub(super) fn ray_lanes(rays: &Rays16) -> [Ray; LANES] {
-    let (origin, dir) = (rays.origin.to_lanes(), rays.dir.to_lanes());
-    let (t_min, t_max) = (rays.t_min.to_array(), rays.t_max.to_array());
-    std::array::from_fn(|i| Ray {
-        origin: origin[i],
-        dir: dir[i],
-        t_min: t_min[i],
-        t_max: t_max[i],
-    })
+/// Sixteen rays as plain arrays by field (stored once), from which the
+/// per-lane fallbacks read the rays of the lanes they walk.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct PlainRays {
+    origin: [[f32; LANES]; 3],
+    dir: [[f32; LANES]; 3],
+    t_min: [f32; LANES],
+    t_max: [f32; LANES],
+}
+
+impl PlainRays {
+    /// The arrays of `rays`.
+    #[inline(always)]
+    pub fn new(rays: &Rays16) -> Self {
+        let (o, d) = (&rays.origin, &rays.dir);
+        Self {
+            origin: [o.x.to_array(), o.y.to_array(), o.z.to_array()],
+            dir: [d.x.to_array(), d.y.to_array(), d.z.to_array()],
+            t_min: rays.t_min.to_array(),
+            t_max: rays.t_max.to_array(),
+        }
+    }
+
+    /// Lane `i`'s ray.
+    #[inline(always)]
+    pub fn lane(&self, i: usize) -> Ray {
+        let (o, d) = (&self.origin, &self.dir);
+        Ray {
+            origin: Vec3::new(o[0][i], o[1][i], o[2][i]),
+            dir: Vec3::new(d[0][i], d[1][i], d[2][i]),
+            t_min: self.t_min[i],
+            t_max: self.t_max[i],
+        }
+    }
 }
 
 /// The hits of the lanes (`None` outside `found`), as plain values.

@@ -168,8 +168,8 @@ impl Accel {
             };
         }
         if !self.tlas.slots.is_empty() && active.any() {
-            let (rays, best) = (lanes::ray_lanes(rays), lanes::hit_lanes(&hits));
-            let lanes = std::array::from_fn(|i| (active.test(i), rays[i], best[i]));
+            let (rays, best) = (lanes::PlainRays::new(rays), lanes::hit_lanes(&hits));
+            let lanes = std::array::from_fn(|i| (active.test(i), rays.lane(i), best[i]));
             hits = Hits16::from_lanes(k, &self.instances_per_lane::<false>(k, &lanes));
         }
         hits
@@ -201,8 +201,8 @@ impl Accel {
         }
         let rest = active.and_not(occluded);
         if !self.tlas.slots.is_empty() && rest.any() {
-            let rays = lanes::ray_lanes(rays);
-            let lanes = std::array::from_fn(|i| (rest.test(i), rays[i], None));
+            let rays = lanes::PlainRays::new(rays);
+            let lanes = std::array::from_fn(|i| (rest.test(i), rays.lane(i), None));
             let found = self.instances_per_lane::<true>(k, &lanes);
             for (lane, hit) in found.iter().enumerate() {
                 occluded.0 |= u16::from(hit.is_some()) << lane;

@@ -16,8 +16,8 @@
 use super::lanes;
 use super::triangles::TestRays;
 use crate::bvh::node::TINY_DIR;
-use crate::ray::{Ray, Rays16};
-use crate::simd::{Avx512, F32x16, LANES, Mask16, U32x16, Vec3x16};
+use crate::ray::Rays16;
+use crate::simd::{Avx512, F32x16, Mask16, U32x16, Vec3x16};
 
 /// Sixteen rays with their box-test and triangle-test constants.
 #[derive(Clone, Copy, Debug)]
@@ -124,8 +124,8 @@ impl RayLanes {
 
     /// The rays as plain values (for the per-lane fallbacks).
     #[inline(always)]
-    pub fn plain(&self) -> [Ray; LANES] {
-        lanes::ray_lanes(&Rays16 {
+    pub fn plain(&self) -> lanes::PlainRays {
+        lanes::PlainRays::new(&Rays16 {
             origin: self.origin,
             dir: self.dir,
             t_min: self.test.t_min,

@@ -130,7 +130,6 @@ fn render_tile_avx512(
         objects: &tracer.objects,
         materials: &tracer.materials,
     };
-    let spp = u64::from(opts.spp);
     let total = queue.total();
     let mut out = TileOutput {
         pixels: Vec::with_capacity(pixels.len()),
@@ -142,7 +141,9 @@ fn render_tile_avx512(
     let mut done = vec![false; RING];
     let mut queued = [0u64; LANES];
     let mut committed = 0u64;
+    // The pixel being summed, and how many of its samples are in `sum`.
     let mut sum = Vec3::ZERO;
+    let mut summed = 0u32;
     let zero3 = Vec3x16::splat(k, Vec3::ZERO);
     let zero = F32x16::splat(k, 0.0);
     let mut paths = Paths16 {
@@ -184,9 +185,10 @@ fn render_tile_avx512(
         if !ended.any() {
             continue;
         }
-        let radiance = paths.radiance.to_lanes();
+        let r = &paths.radiance;
+        let [x, y, z] = [r.x.to_array(), r.y.to_array(), r.z.to_array()];
         for lane in ended.lanes() {
-            let l = radiance[lane];
+            let l = Vec3::new(x[lane], y[lane], z[lane]);
             let slot = (queued[lane] % RING as u64) as usize;
             ring[slot] = if l.is_finite() {
                 l
@@ -201,10 +203,11 @@ fn render_tile_avx512(
             let slot = (committed % RING as u64) as usize;
             done[slot] = false;
             sum += ring[slot];
-            if committed % spp == spp - 1 {
-                let pixel = pixels[(committed / spp) as usize];
+            summed += 1;
+            if summed == opts.spp {
+                let pixel = pixels[out.pixels.len()];
                 out.pixels.push((pixel, sum / opts.spp as f32));
-                sum = Vec3::ZERO;
+                (sum, summed) = (Vec3::ZERO, 0);
             }
             committed += 1;
         }

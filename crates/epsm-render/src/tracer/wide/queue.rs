@@ -130,10 +130,15 @@ impl Queue {
         let len = (self.total - self.drawn).min(LANES as u64) as usize;
         debug_assert!(len > 0);
         let spp = u64::from(self.spp);
+        // One division, then the samples of the batch in order.
+        let (mut p, mut s) = ((self.drawn / spp) as u32, (self.drawn % spp) as u32);
         let (mut pixel, mut sample) = ([0u32; LANES], [0u32; LANES]);
         for lane in 0..len {
-            let seq = self.drawn + lane as u64;
-            (pixel[lane], sample[lane]) = ((seq / spp) as u32, (seq % spp) as u32);
+            (pixel[lane], sample[lane]) = (p, s);
+            s += 1;
+            if s == self.spp {
+                (p, s) = (p + 1, 0);
+            }
         }
         self.drawn += len as u64;
         let m = Mask16::first(len);
