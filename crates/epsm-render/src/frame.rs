@@ -127,6 +127,7 @@ impl Frames16 {
         }
     }
 
+    #[cfg(test)]
     /// Lane `lane` as a [`Frame`].
     #[inline(always)]
     pub fn lane(&self, lane: usize) -> Frame {
@@ -145,12 +146,6 @@ impl Frames16 {
             t: Vec3x16::select(m, a.t, b.t),
             n: Vec3x16::select(m, a.n, b.n),
         }
-    }
-
-    /// [`Frame::to_local`] in every lane.
-    #[inline(always)]
-    pub fn to_local(self, v: Vec3x16) -> Vec3x16 {
-        Vec3x16::new(v.dot(self.s), v.dot(self.t), v.dot(self.n))
     }
 
     /// [`Frame::to_world`] in every lane.

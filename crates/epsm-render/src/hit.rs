@@ -381,6 +381,7 @@ pub(crate) struct Hits16 {
 
 #[cfg(target_arch = "x86_64")]
 impl Hits16 {
+    #[cfg(test)]
     /// Lane `lane` as a [`Hit`] (`None` outside `found`).
     #[inline(always)]
     pub fn lane(&self, lane: usize) -> Option<Hit> {
@@ -484,6 +485,7 @@ impl SurfacePoints16 {
         }
     }
 
+    #[cfg(test)]
     /// Lane `lane` as a [`SurfacePoint`].
     #[inline(always)]
     pub fn lane(&self, lane: usize) -> SurfacePoint {

@@ -130,20 +130,6 @@ pub(crate) struct Rays16 {
     pub t_max: F32x16,
 }
 
-#[cfg(target_arch = "x86_64")]
-impl Rays16 {
-    /// Lane `lane` as a [`Ray`].
-    #[inline(always)]
-    pub fn lane(&self, lane: usize) -> Ray {
-        Ray {
-            origin: self.origin.lane(lane),
-            dir: self.dir.lane(lane),
-            t_min: self.t_min.lane(lane),
-            t_max: self.t_max.lane(lane),
-        }
-    }
-}
-
 /// [`offset_origin`] in sixteen lanes: the operations of
 /// [`offset_origin_sse2`] lane by lane, so the same origins bit for bit.
 #[cfg(target_arch = "x86_64")]

@@ -245,8 +245,6 @@ impl F32x16 {
         ge, _CMP_GE_OQ;
         /// `self == o` (false on NaN).
         eq, _CMP_EQ_OQ;
-        /// `self != o` (true on NaN).
-        ne, _CMP_NEQ_UQ;
     }
 
     /// Lanes neither infinite nor NaN.
@@ -274,12 +272,6 @@ impl F32x16 {
     #[inline(always)]
     pub fn from_u32(u: U32x16) -> Self {
         Self(avx!(_mm512_cvtepu32_ps(u.0)))
-    }
-
-    /// `i as f32` per lane, the lanes of `i` read as `i32`.
-    #[inline(always)]
-    pub fn from_i32(i: U32x16) -> Self {
-        Self(avx!(_mm512_cvtepi32_ps(i.0)))
     }
 
     /// `self as i32` per lane for finite lanes in `i32`'s range (truncated

@@ -113,15 +113,6 @@ impl F64x16 {
         ])
     }
 
-    /// `if self > o { self } else { o }` (module docs of `simd`).
-    #[inline(always)]
-    pub fn max(self, o: Self) -> Self {
-        Self([
-            avx!(_mm512_max_pd(self.0[0], o.0[0])),
-            avx!(_mm512_max_pd(self.0[1], o.0[1])),
-        ])
-    }
-
     /// Rust's `f64::clamp`: `lo` below it, `hi` above it, NaN stays NaN.
     #[inline(always)]
     pub fn clamp(self, lo: Self, hi: Self) -> Self {
@@ -148,8 +139,6 @@ impl F64x16 {
         gt, _CMP_GT_OQ;
         /// `self >= o` (false on NaN).
         ge, _CMP_GE_OQ;
-        /// `self == o` (false on NaN).
-        eq, _CMP_EQ_OQ;
     }
 
     /// The lanes rounded to `f32` (to nearest, as `as f32`).

@@ -86,12 +86,6 @@ impl Avx512 {
         F32x16::splat(self, x)
     }
 
-    /// Every lane `x` ([`F64x16::splat`]).
-    #[inline(always)]
-    pub fn f64(self, x: f64) -> F64x16 {
-        F64x16::splat(self, x)
-    }
-
     /// Every lane `x` ([`U32x16::splat`]).
     #[inline(always)]
     pub fn u32(self, x: u32) -> U32x16 {

@@ -100,13 +100,12 @@ fn f32_lanes_match_scalar_operations() {
                 assert!(same(g, f(a[i], b[i])), "{name}({}, {})", a[i], b[i]);
             }
         }
-        let compares: [Compare; 6] = [
+        let compares: [Compare; 5] = [
             ("lt", x.lt(y), |a, b| a < b),
             ("le", x.le(y), |a, b| a <= b),
             ("gt", x.gt(y), |a, b| a > b),
             ("ge", x.ge(y), |a, b| a >= b),
             ("eq", x.eq(y), |a, b| a == b),
-            ("ne", x.ne(y), |a, b| a != b),
         ];
         for (name, got, f) in compares {
             for i in 0..LANES {
@@ -124,12 +123,11 @@ fn f32_lanes_match_scalar_operations() {
         // Conversions from integers, and truncation within i32's range.
         let u: [u32; LANES] = std::array::from_fn(|_| rng.below(1 << 32) as u32);
         let ux = U32x16::from_array(k, u);
-        let (from_u, from_i) = (F32x16::from_u32(ux).to_array(), F32x16::from_i32(ux));
+        let from_u = F32x16::from_u32(ux).to_array();
         let small = F32x16::from_array(k, a.map(|v| if v.abs() < 2e9 { v } else { 0.5 }));
         let truncated = small.trunc_i32().to_array();
         for i in 0..LANES {
             assert!(same(from_u[i], u[i] as f32));
-            assert!(same(from_i.lane(i), u[i] as i32 as f32));
             assert_eq!(truncated[i] as i32, small.lane(i) as i32);
         }
     }
@@ -144,13 +142,12 @@ fn f64_lanes_match_scalar_operations() {
         let (a, b) = (a.map(f64::from), b.map(|v| f64::from(v) * 1.000_000_1));
         let (x, y) = (F64x16::from_array(k, a), F64x16::from_array(k, b));
         let m = Mask16(rng.below(1 << 16) as u16);
-        let results: [Binary64; 11] = [
+        let results: [Binary64; 10] = [
             ("add", x + y, |a, b| a + b),
             ("sub", x - y, |a, b| a - b),
             ("mul", x * y, |a, b| a * b),
             ("div", x / y, |a, b| a / b),
             ("min", x.min(y), |a, b| if a < b { a } else { b }),
-            ("max", x.max(y), |a, b| if a > b { a } else { b }),
             ("sqrt", x.sqrt(), |a, _| a.sqrt()),
             ("abs", x.abs(), |a, _| a.abs()),
             ("neg", -x, |a, _| -a),
@@ -168,17 +165,11 @@ fn f64_lanes_match_scalar_operations() {
         }
         let narrow = x.to_f32().to_array();
         let selected = F64x16::select(m, x, y).to_array();
-        let compares = [x.lt(y), x.le(y), x.gt(y), x.ge(y), x.eq(y)];
+        let compares = [x.lt(y), x.le(y), x.gt(y), x.ge(y)];
         for i in 0..LANES {
             assert!(same(narrow[i], a[i] as f32));
             assert!(same64(selected[i], if m.test(i) { a[i] } else { b[i] }));
-            let expected = [
-                a[i] < b[i],
-                a[i] <= b[i],
-                a[i] > b[i],
-                a[i] >= b[i],
-                a[i] == b[i],
-            ];
+            let expected = [a[i] < b[i], a[i] <= b[i], a[i] > b[i], a[i] >= b[i]];
             for (c, e) in compares.iter().zip(expected) {
                 assert_eq!(c.test(i), e, "{} against {}", a[i], b[i]);
             }
@@ -198,7 +189,7 @@ fn integer_lanes_match_wrapping_scalar_operations() {
         let b: [u32; LANES] = std::array::from_fn(|_| rng.below(1 << 32) as u32);
         let (x, y) = (U32x16::from_array(k, a), U32x16::from_array(k, b));
         let n = rng.below(33) as u32;
-        let results: [(U32x16, Ternary); 8] = [
+        let results: [(U32x16, Ternary); 7] = [
             (x + y, |a, b, _| a.wrapping_add(b)),
             (x - y, |a, b, _| a.wrapping_sub(b)),
             (x * y, |a, b, _| a.wrapping_mul(b)),
@@ -206,7 +197,6 @@ fn integer_lanes_match_wrapping_scalar_operations() {
             (x | y, |a, b, _| a | b),
             (x ^ y, |a, b, _| a ^ b),
             (x >> n, |a, _, n| a.checked_shr(n).unwrap_or(0)),
-            (x.min(y), |a, b, _| a.min(b)),
         ];
         for (got, f) in results {
             for (i, g) in got.to_array().into_iter().enumerate() {
@@ -238,7 +228,7 @@ fn integer_lanes_match_wrapping_scalar_operations() {
 }
 
 #[test]
-fn masks_gathers_and_counting() {
+fn masks_and_gathers() {
     let Some(k) = token() else { return };
     let mut rng = Rng::new(4);
     let table: Vec<f32> = (0..100).map(|i| i as f32 * 0.5).collect();
@@ -262,19 +252,15 @@ fn masks_gathers_and_counting() {
         let ix = U32x16::from_array(k, index);
         let got = F32x16::gather(&table, ix, m, F32x16::splat(k, -1.0)).to_array();
         let got_u = U32x16::gather(&words, ix, m, U32x16::splat(k, 9)).to_array();
-        let counted = U32x16::splat(k, 5).count_into(m, 40).to_array();
         let longs: Vec<u64> = words.iter().map(|&w| u64::from(w) << 33 | 1).collect();
         let got_64 = U64x16::gather(&longs, ix, m, U64x16::splat(k, 3)).to_array();
-        let mut next = 40;
         for i in 0..LANES {
             if m.test(i) {
                 assert_eq!(got[i], table[index[i] as usize]);
                 assert_eq!(got_u[i], words[index[i] as usize]);
                 assert_eq!(got_64[i], longs[index[i] as usize]);
-                assert_eq!(counted[i], next);
-                next += 1;
             } else {
-                assert_eq!((got[i], got_u[i], counted[i], got_64[i]), (-1.0, 9, 5, 3));
+                assert_eq!((got[i], got_u[i], got_64[i]), (-1.0, 9, 3));
             }
         }
         assert_eq!(m.lanes().count() as u32, m.count());
@@ -313,12 +299,11 @@ fn vectors_match_glam() {
             (x * y).to_lanes(),
             (x * s).to_lanes(),
             x.div(s).to_lanes(),
-            x.cross(y).to_lanes(),
             x.normalize(k).to_lanes(),
             (-x).to_lanes(),
         ];
         let (dot, len, max) = (x.dot(y), x.length(), x.max_element());
-        let (finite, zero) = (x.normalize(k).is_finite(), x.is_zero(k));
+        let zero = x.is_zero(k);
         for i in 0..LANES {
             let si = s.lane(i);
             let expected = [
@@ -327,7 +312,6 @@ fn vectors_match_glam() {
                 a[i] * b[i],
                 a[i] * si,
                 a[i] / si,
-                a[i].cross(b[i]),
                 a[i] * (1.0 / a[i].length()),
                 -a[i],
             ];
@@ -339,7 +323,6 @@ fn vectors_match_glam() {
             assert!(same(dot.lane(i), a[i].dot(b[i])));
             assert!(same(len.lane(i), a[i].length()));
             assert!(same(max.lane(i), a[i].max_element()));
-            assert_eq!(finite.test(i), (a[i] * (1.0 / a[i].length())).is_finite());
             assert_eq!(zero.test(i), a[i] == Vec3::ZERO);
         }
     }

@@ -106,23 +106,6 @@ impl U32x16 {
         Mask16(avx!(_mm512_cmpeq_epu32_mask(self.0, o.0)))
     }
 
-    /// Unsigned minimum.
-    #[inline(always)]
-    pub fn min(self, o: Self) -> Self {
-        Self(avx!(_mm512_min_epu32(self.0, o.0)))
-    }
-
-    /// The lanes of `m` moved to consecutive values `first, first + 1, …`
-    /// in lane order; the other lanes keep theirs.
-    #[inline(always)]
-    pub fn count_into(self, m: Mask16, first: u32) -> Self {
-        let iota = avx!(_mm512_add_epi32(
-            _mm512_set_epi32(15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0),
-            _mm512_set1_epi32(first as i32),
-        ));
-        Self(avx!(_mm512_mask_expand_epi32(self.0, m.0, iota)))
-    }
-
     /// `table[index]` in the lanes of `m`, `fallback` in the others.
     ///
     /// # Panics

@@ -51,6 +51,7 @@ impl U64x16 {
         Self([v, v])
     }
 
+    #[cfg(test)]
     /// Lane `i` is `lanes[i]`.
     #[inline(always)]
     pub fn from_array(_: Avx512, lanes: [u64; LANES]) -> Self {

@@ -119,16 +119,6 @@ impl Vec3x16 {
         self.x * o.x + self.y * o.y + self.z * o.z
     }
 
-    /// glam's `cross`, term for term.
-    #[inline(always)]
-    pub fn cross(self, o: Self) -> Self {
-        Self::new(
-            self.y * o.z - o.y * self.z,
-            self.z * o.x - o.z * self.x,
-            self.x * o.y - o.x * self.y,
-        )
-    }
-
     /// `dot(self, self)`.
     #[inline(always)]
     pub fn length_squared(self) -> F32x16 {
@@ -152,12 +142,6 @@ impl Vec3x16 {
     #[inline(always)]
     pub fn max_element(self) -> F32x16 {
         self.x.max(self.y.max(self.z))
-    }
-
-    /// Lanes whose three components are finite.
-    #[inline(always)]
-    pub fn is_finite(self) -> Mask16 {
-        self.x.is_finite() & self.y.is_finite() & self.z.is_finite()
     }
 
     /// Lanes equal to the zero vector (`== Vec3::ZERO`, so `−0` counts).

@@ -107,7 +107,7 @@ impl World16 {
 }
 
 impl Accel {
-    /// Lane `i` in `active`: exactly `self.closest_hit(&rays.lane(i))`
+    /// Lane `i` in `active`: exactly `self.closest_hit` of lane `i`'s ray
     /// (but for ties, module docs); other lanes: `found` unset.
     #[inline(always)]
     pub(crate) fn closest_hits16(&self, k: Avx512, rays: &Rays16, active: Mask16) -> Hits16 {
@@ -175,7 +175,7 @@ impl Accel {
         hits
     }
 
-    /// Lane `i` in `active`: exactly `self.occluded(&rays.lane(i))`; other
+    /// Lane `i` in `active`: exactly `self.occluded` of lane `i`'s ray; other
     /// lanes unset.
     #[inline(always)]
     pub(crate) fn occluded16(&self, k: Avx512, rays: &Rays16, active: Mask16) -> Mask16 {

@@ -21,7 +21,6 @@
 //! | `dielectric.rs` | Fresnel, refraction and the lobe choice |
 //! | `rough_conductor.rs` | GGX lanes |
 //! | `cases.rs`, `tests.rs` | bit-identity against the scalar functions |
-//! | `timing.rs` | speed against the scalar functions |
 //!
 //! Per-lane fallback: image-textured albedo ([`Texture::eval`] per lane
 //! that reads it; no shipped scene has one).
@@ -36,8 +35,6 @@ mod tables;
 mod cases;
 #[cfg(test)]
 mod tests;
-#[cfg(test)]
-mod timing;
 
 use glam::Vec3;
 

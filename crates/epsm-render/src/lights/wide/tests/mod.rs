@@ -5,7 +5,6 @@
 //! without AVX-512.
 
 mod random;
-mod timing;
 
 use std::path::Path;
 
@@ -46,9 +45,7 @@ struct Inputs {
 }
 
 impl Inputs {
-    /// The inputs as `sample16` takes them (inlined into the timing's
-    /// AVX-512 loop).
-    #[inline(always)]
+    /// The inputs as `sample16` takes them.
     fn lanes(&self, k: Avx512) -> (Vec3x16, F32x16, [F32x16; 2]) {
         let u = [self.u.map(|u| u.x), self.u.map(|u| u.y)];
         (
