@@ -20,7 +20,7 @@ pub struct LightTable {
     /// For each object, its index in `area`.
     pub(super) emitter_of_object: Vec<Option<u32>>,
     /// Point lights.
-    points: Vec<PointLight>,
+    pub(super) points: Vec<PointLight>,
     /// The background.
     pub(super) background: Background,
     /// Selection ∝ power over `area ++ points ++ [background]`; `None` when

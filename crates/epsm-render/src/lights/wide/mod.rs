@@ -14,7 +14,8 @@
 //! | … more than 16 entries | the scalar search per lane |
 //! | area emitters: point, side test, solid-angle pdf, MIS pdf | lanes ([`area`]) |
 //! | constant background: sample (libm `cos`/`sin` per lane), radiance, pdf | lanes ([`background`]) |
-//! | point lights, environment maps | the scalar function per lane |
+//! | point lights: connection, `I / d²` | lanes ([`point`]) |
+//! | environment maps | the scalar function per lane |
 //!
 //! Lanes that select different kinds of light are handled kind by kind
 //! under each kind's mask. Only what the tracer's inner loop reads is
@@ -24,6 +25,7 @@
 mod area;
 mod background;
 mod discrete;
+mod point;
 #[cfg(test)]
 mod tests;
 
@@ -146,17 +148,22 @@ impl LightTable {
         if area.any() {
             out = self.sample_area16(k, &pick, p, u, area);
         }
+        let points = active.and_not(area | background);
+        if points.any() {
+            let connected = self.sample_points16(k, &pick, p, points);
+            out = LightSamples16::select(points, connected, out);
+        }
         let rest = match &self.background {
             Background::Constant(radiance) => {
                 if background.any() {
                     let sky = background::sample_constant16(k, *radiance, pick.pmf, u, background);
                     out = LightSamples16::select(background, sky, out);
                 }
-                active.and_not(area | background)
+                Mask16::NONE
             }
-            Background::EnvMap(_) => active.and_not(area),
+            Background::EnvMap(_) => background,
         };
-        // Point lights and environment maps: the scalar function per lane.
+        // Environment maps: the scalar function per lane.
         if rest.any() {
             let u = [u[0].to_array(), u[1].to_array()];
             let samples = self.sample_lanes(

@@ -84,7 +84,12 @@ pub(super) fn random_table(rng: &mut Rng) -> LightTable {
     let points: Vec<PointLight> = (0..rng.below(4))
         .map(|i| PointLight {
             name: format!("p{i}"),
-            position: rng.dvec3(-3.0, 3.0),
+            // The first light at an `f32` point, which `reference` may pick.
+            position: if i == 0 {
+                rng.dvec3(-3.0, 3.0).as_vec3().as_dvec3()
+            } else {
+                rng.dvec3(-3.0, 3.0)
+            },
             intensity: if i == 1 {
                 Vec3::ZERO
             } else {
@@ -121,10 +126,16 @@ pub(super) fn emitter_point(
     t.p0 + a * t.e1 + b * t.e2 + h * t.normal
 }
 
-/// A reference point: anywhere, on an emitter, in its plane, or on either
-/// side of it (near and far).
+/// A reference point: anywhere, at a point light, on an emitter, in its
+/// plane, or on either side of it (near and far).
 pub(super) fn reference(table: &LightTable, rng: &mut Rng) -> Vec3 {
     let emitters = table.area.len();
+    if !table.points.is_empty() && rng.below(8) == 0 {
+        // At a point light (no connection when that is the first light).
+        return table.points[rng.below(table.points.len())]
+            .position
+            .as_vec3();
+    }
     if emitters == 0 || rng.below(4) == 0 {
         return rng.dvec3(-4.0, 4.0).as_vec3();
     }
