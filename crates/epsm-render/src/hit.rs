@@ -395,6 +395,24 @@ impl Hits16 {
         })
     }
 
+    /// The hits of the lanes (`None` outside `found`), as plain values.
+    #[inline(always)]
+    pub fn to_lanes(self) -> [Option<Hit>; LANES] {
+        let (object, triangle) = (self.object.to_array(), self.triangle.to_array());
+        let (b1, b2, t) = (self.b1.to_array(), self.b2.to_array(), self.t.to_array());
+        let world_index = self.world_index.to_array();
+        std::array::from_fn(|i| {
+            self.found.test(i).then_some(Hit {
+                object: object[i],
+                triangle: triangle[i],
+                b1: b1[i],
+                b2: b2[i],
+                t: t[i],
+                world_index: world_index[i],
+            })
+        })
+    }
+
     /// The lanes of `hits` (`None`: not found, and zeros).
     #[inline(always)]
     pub fn from_lanes(k: Avx512, hits: &[Option<Hit>; LANES]) -> Self {

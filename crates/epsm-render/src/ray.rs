@@ -158,15 +158,20 @@ fn offset_components16(k: Avx512, pc: F32x16, nc: F32x16) -> F32x16 {
 mod tests {
     use super::*;
 
-    #[test]
-    fn offset_origin_matches_the_per_coordinate_rule() {
-        let mut state = 0x1234_5678_9ABC_DEF1u64;
-        let mut uniform = move || {
+    /// A xorshift stream of uniforms in `[0, 1)` (24 bits) from `seed`.
+    fn uniforms(seed: u64) -> impl FnMut() -> f32 {
+        let mut state = seed;
+        move || {
             state ^= state << 13;
             state ^= state >> 7;
             state ^= state << 17;
             (state >> 40) as f32 / (1u64 << 24) as f32
-        };
+        }
+    }
+
+    #[test]
+    fn offset_origin_matches_the_per_coordinate_rule() {
+        let mut uniform = uniforms(0x1234_5678_9ABC_DEF1);
         for k in 0..20_000 {
             let scale = [1e-3, 0.02, 1.0, 1e3, 1e6][k % 5];
             let p = (Vec3::new(uniform(), uniform(), uniform()) - 0.5) * 2.0 * scale;
@@ -211,13 +216,7 @@ mod tests {
             eprintln!("no AVX-512 on this CPU: nothing to test");
             return;
         };
-        let mut state = 0x2545_F491_4F6C_DD1Du64;
-        let mut uniform = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 40) as f32 / (1u64 << 24) as f32
-        };
+        let mut uniform = uniforms(0x2545_F491_4F6C_DD1D);
         for round in 0..2000 {
             let scale = [1e-3, 0.02, 1.0, 1e3, 1e6][round % 5];
             let p: [Vec3; 16] = std::array::from_fn(|i| {

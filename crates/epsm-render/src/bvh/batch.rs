@@ -22,7 +22,7 @@ use crate::{
     frame::Frame,
     hit::{Hits16, TexCoords},
     ray::Rays16,
-    simd::{Avx512, F32x16, LANES, Mask16, U32x16, Vec3x16},
+    simd::{Avx512, F32x16, LANES, Mask16, Vec3x16},
 };
 #[cfg(target_arch = "x86_64")]
 use glam::{Vec2, Vec3};
@@ -100,20 +100,8 @@ impl Accel {
 fn closest_avx512(accel: &Accel, k: Avx512, rays: &[Ray], out: &mut Vec<Option<Hit>>) {
     for chunk in rays.chunks(LANES) {
         let (lanes, active) = packet(k, chunk);
-        let hits = accel.closest_hits16(k, &lanes, active);
-        let (object, triangle) = (hits.object.to_array(), hits.triangle.to_array());
-        let (b1, b2, t) = (hits.b1.to_array(), hits.b2.to_array(), hits.t.to_array());
-        let world_index = hits.world_index.to_array();
-        out.extend((0..chunk.len()).map(|i| {
-            hits.found.test(i).then(|| Hit {
-                object: object[i],
-                triangle: triangle[i],
-                b1: b1[i],
-                b2: b2[i],
-                t: t[i],
-                world_index: world_index[i],
-            })
-        }));
+        let hits = accel.closest_hits16(k, &lanes, active).to_lanes();
+        out.extend_from_slice(&hits[..chunk.len()]);
     }
 }
 
@@ -181,23 +169,11 @@ fn points_avx512(
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
 fn hit_packet(k: Avx512, chunk: &[Hit]) -> Hits16 {
-    let (mut floats, mut ints) = ([[0.0f32; LANES]; 3], [[0u32; LANES]; 3]);
-    for (lane, hit) in chunk.iter().enumerate().take(LANES) {
-        (floats[0][lane], floats[1][lane], floats[2][lane]) = (hit.b1, hit.b2, hit.t);
-        (ints[0][lane], ints[1][lane]) = (hit.object, hit.triangle);
-        ints[2][lane] = hit.world_index;
+    let mut hits = [None; LANES];
+    for (lane, hit) in hits.iter_mut().zip(chunk) {
+        *lane = Some(*hit);
     }
-    let [b1, b2, t] = floats;
-    let [object, triangle, world_index] = ints;
-    Hits16 {
-        found: Mask16::first(chunk.len()),
-        object: U32x16::from_array(k, object),
-        triangle: U32x16::from_array(k, triangle),
-        b1: F32x16::from_array(k, b1),
-        b2: F32x16::from_array(k, b2),
-        t: F32x16::from_array(k, t),
-        world_index: U32x16::from_array(k, world_index),
-    }
+    Hits16::from_lanes(k, &hits)
 }
 
 /// The rays of `chunk` (one to sixteen) as lanes, the unused lanes copies

@@ -369,6 +369,7 @@ impl FlatBvh {
 mod tests {
     use super::*;
     use crate::bvh::Portable;
+    use crate::bvh::test_support::push_soup_triangle;
     use crate::bvh::triangle::{PackedTriangle, RayShear};
     use crate::scene::Mesh;
     use epsm_testkit::Rng;
@@ -381,23 +382,7 @@ mod tests {
     fn soup(rng: &mut Rng, count: usize) -> Mesh {
         let mut mesh = Mesh::default();
         for i in 0..count {
-            let a = rng.dvec3(-1.0, 1.0).as_vec3();
-            let b = a + rng.dvec3(-0.4, 0.4).as_vec3();
-            let c = match i % 7 {
-                0 | 3 => {
-                    a + (b - a) * rng.range(0.1, 0.9) as f32 + rng.dvec3(-1e-5, 1e-5).as_vec3()
-                }
-                5 => a + (b - a) * 0.5,
-                _ => a + rng.dvec3(-0.4, 0.4).as_vec3(),
-            };
-            let base = mesh.positions.len() as u32;
-            mesh.positions.extend([a, b, c]);
-            mesh.indices.push([base, base + 1, base + 2]);
-            if i % 4 == 1 {
-                let d = c + rng.dvec3(-0.3, 0.3).as_vec3();
-                mesh.positions.push(d);
-                mesh.indices.push([base + 2, base + 1, base + 3]);
-            }
+            push_soup_triangle(rng, &mut mesh, i);
         }
         mesh
     }

@@ -50,6 +50,8 @@ mod flat;
 mod node;
 mod packet;
 mod shading;
+#[cfg(test)]
+mod test_support;
 mod tlas;
 mod triangle;
 mod walk;

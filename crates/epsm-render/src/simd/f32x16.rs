@@ -2,7 +2,7 @@
 //! return.
 
 use std::arch::x86_64::*;
-use std::ops::{Add, BitAnd, BitOr, BitXor, Div, Mul, Neg, Not, Sub};
+use std::ops::{BitAnd, BitOr, BitXor, Not};
 
 use super::{Avx512, F64x16, LANES, U32x16};
 
@@ -83,6 +83,17 @@ impl Mask16 {
     pub fn and_not(self, other: Self) -> Self {
         Self(self.0 & !other.0)
     }
+
+    /// Panics unless `len ≥ self.count()`: that a slice of `len` values
+    /// holds enough for an expanding load into the lanes of `self` (the
+    /// `expand_from` methods).
+    #[inline(always)]
+    pub(super) fn assert_expand_len(self, len: usize) {
+        assert!(
+            len >= self.count() as usize,
+            "expanding load past the slice"
+        );
+    }
 }
 
 impl BitAnd for Mask16 {
@@ -117,43 +128,14 @@ impl Not for Mask16 {
     }
 }
 
-macro_rules! binary {
-    ($trait:ident, $method:ident, $intrinsic:ident) => {
-        impl $trait for F32x16 {
-            type Output = Self;
-            #[inline(always)]
-            fn $method(self, o: Self) -> Self {
-                Self(avx!($intrinsic(self.0, o.0)))
-            }
-        }
-    };
-}
+binary!(one F32x16;
+    Add, add, _mm512_add_ps;
+    Sub, sub, _mm512_sub_ps;
+    Mul, mul, _mm512_mul_ps;
+    Div, div, _mm512_div_ps;
+);
 
-binary!(Add, add, _mm512_add_ps);
-binary!(Sub, sub, _mm512_sub_ps);
-binary!(Mul, mul, _mm512_mul_ps);
-binary!(Div, div, _mm512_div_ps);
-
-impl Neg for F32x16 {
-    type Output = Self;
-    /// Flips the sign bit, as scalar negation does.
-    #[inline(always)]
-    fn neg(self) -> Self {
-        Self(avx!(_mm512_xor_ps(self.0, _mm512_set1_ps(-0.0))))
-    }
-}
-
-macro_rules! compare {
-    ($(#[$doc:meta] $method:ident, $predicate:ident;)*) => {
-        $(
-            #[$doc]
-            #[inline(always)]
-            pub fn $method(self, o: Self) -> Mask16 {
-                Mask16(avx!(_mm512_cmp_ps_mask::<$predicate>(self.0, o.0)))
-            }
-        )*
-    };
-}
+negate!(one F32x16; _mm512_xor_ps, _mm512_set1_ps);
 
 impl F32x16 {
     /// Every lane `x`.
@@ -208,12 +190,7 @@ impl F32x16 {
         Self(avx!(_mm512_max_ps(self.0, o.0)))
     }
 
-    /// Rust's `f32::clamp`: `lo` below it, `hi` above it, NaN stays NaN.
-    #[inline(always)]
-    pub fn clamp(self, lo: Self, hi: Self) -> Self {
-        let x = Self::select(self.lt(lo), lo, self);
-        Self::select(x.gt(hi), hi, x)
-    }
+    clamp!("f32");
 
     /// `a` in the lanes of `m`, `b` in the others.
     #[inline(always)]
@@ -234,7 +211,7 @@ impl F32x16 {
         Self(avx!(_mm512_castsi512_ps(bits)))
     }
 
-    compare! {
+    compare! { one _mm512_cmp_ps_mask;
         /// `self < o` (false on NaN).
         lt, _CMP_LT_OQ;
         /// `self <= o` (false on NaN).
@@ -299,13 +276,7 @@ impl F32x16 {
     /// If an index of a lane in `m` is out of bounds.
     #[inline(always)]
     pub fn gather(table: &[f32], index: U32x16, m: Mask16, fallback: Self) -> Self {
-        let len = u32::try_from(table.len())
-            .unwrap_or(u32::MAX)
-            .min(i32::MAX as u32);
-        assert!(
-            (index.lt(U32x16(avx!(_mm512_set1_epi32(len as i32)))) | !m).all(),
-            "gather index out of bounds"
-        );
+        index.assert_gather_indices(m, table.len());
         // Every lane read (those of `m`) indexes `table` in bounds (asserted
         // above, and below `i32::MAX`, so the signed indices are the same).
         Self(avx!(_mm512_mask_i32gather_ps::<4>(
@@ -336,10 +307,7 @@ impl F32x16 {
     /// If `src` holds fewer values than `m` has lanes.
     #[inline(always)]
     pub fn expand_from(self, m: Mask16, src: &[f32]) -> Self {
-        assert!(
-            src.len() >= m.count() as usize,
-            "expanding load past the slice"
-        );
+        m.assert_expand_len(src.len());
         // Reads `m.count()` consecutive `f32`s from `src`, in bounds (asserted).
         Self(avx!(_mm512_mask_expandloadu_ps(self.0, m.0, src.as_ptr())))
     }

@@ -2,7 +2,6 @@
 //! done in `f64` (exact spheres, light selection).
 
 use std::arch::x86_64::*;
-use std::ops::{Add, Div, Mul, Neg, Sub};
 
 use super::{Avx512, F32x16, LANES, Mask16};
 
@@ -11,52 +10,14 @@ use super::{Avx512, F32x16, LANES, Mask16};
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct F64x16(pub(super) [__m512d; 2]);
 
-macro_rules! binary {
-    ($trait:ident, $method:ident, $intrinsic:ident) => {
-        impl $trait for F64x16 {
-            type Output = Self;
-            #[inline(always)]
-            fn $method(self, o: Self) -> Self {
-                Self([
-                    avx!($intrinsic(self.0[0], o.0[0])),
-                    avx!($intrinsic(self.0[1], o.0[1])),
-                ])
-            }
-        }
-    };
-}
+binary!(two F64x16;
+    Add, add, _mm512_add_pd;
+    Sub, sub, _mm512_sub_pd;
+    Mul, mul, _mm512_mul_pd;
+    Div, div, _mm512_div_pd;
+);
 
-binary!(Add, add, _mm512_add_pd);
-binary!(Sub, sub, _mm512_sub_pd);
-binary!(Mul, mul, _mm512_mul_pd);
-binary!(Div, div, _mm512_div_pd);
-
-impl Neg for F64x16 {
-    type Output = Self;
-    /// Flips the sign bit, as scalar negation does.
-    #[inline(always)]
-    fn neg(self) -> Self {
-        let sign = avx!(_mm512_set1_pd(-0.0));
-        Self([
-            avx!(_mm512_xor_pd(self.0[0], sign)),
-            avx!(_mm512_xor_pd(self.0[1], sign)),
-        ])
-    }
-}
-
-macro_rules! compare {
-    ($(#[$doc:meta] $method:ident, $predicate:ident;)*) => {
-        $(
-            #[$doc]
-            #[inline(always)]
-            pub fn $method(self, o: Self) -> Mask16 {
-                let lo = avx!(_mm512_cmp_pd_mask::<$predicate>(self.0[0], o.0[0]));
-                let hi = avx!(_mm512_cmp_pd_mask::<$predicate>(self.0[1], o.0[1]));
-                Mask16(u16::from(lo) | u16::from(hi) << 8)
-            }
-        )*
-    };
-}
+negate!(two F64x16; _mm512_xor_pd, _mm512_set1_pd);
 
 impl F64x16 {
     /// Every lane `x`.
@@ -113,12 +74,7 @@ impl F64x16 {
         ])
     }
 
-    /// Rust's `f64::clamp`: `lo` below it, `hi` above it, NaN stays NaN.
-    #[inline(always)]
-    pub fn clamp(self, lo: Self, hi: Self) -> Self {
-        let x = Self::select(self.lt(lo), lo, self);
-        Self::select(x.gt(hi), hi, x)
-    }
+    clamp!("f64");
 
     /// `a` in the lanes of `m`, `b` in the others.
     #[inline(always)]
@@ -130,7 +86,7 @@ impl F64x16 {
         ])
     }
 
-    compare! {
+    compare! { two _mm512_cmp_pd_mask;
         /// `self < o` (false on NaN).
         lt, _CMP_LT_OQ;
         /// `self <= o` (false on NaN).

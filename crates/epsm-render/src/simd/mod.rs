@@ -54,6 +54,108 @@ macro_rules! avx {
     };
 }
 
+/// Implements operator traits for a lane type by one intrinsic each, applied
+/// register by register: `binary!(one T; Add, add, _mm512_add_ps; …)` for a
+/// type wrapping one register, `binary!(two T; …)` for one wrapping two
+/// (lanes 0–7, 8–15). Every impl is `#[inline(always)]`.
+macro_rules! binary {
+    (one $ty:ident; $($trait:ident, $method:ident, $intrinsic:ident;)*) => {
+        $(
+            impl std::ops::$trait for $ty {
+                type Output = Self;
+                #[inline(always)]
+                fn $method(self, o: Self) -> Self {
+                    Self(avx!($intrinsic(self.0, o.0)))
+                }
+            }
+        )*
+    };
+    (two $ty:ident; $($trait:ident, $method:ident, $intrinsic:ident;)*) => {
+        $(
+            impl std::ops::$trait for $ty {
+                type Output = Self;
+                #[inline(always)]
+                fn $method(self, o: Self) -> Self {
+                    Self([
+                        avx!($intrinsic(self.0[0], o.0[0])),
+                        avx!($intrinsic(self.0[1], o.0[1])),
+                    ])
+                }
+            }
+        )*
+    };
+}
+
+/// Implements `Neg` for a float lane type as scalar negation does it: the
+/// sign bit flipped (`$xor` with `$set1(-0.0)`), register by register
+/// (`one` or `two` registers, as for [`binary!`]).
+macro_rules! negate {
+    (one $ty:ident; $xor:ident, $set1:ident) => {
+        impl std::ops::Neg for $ty {
+            type Output = Self;
+            /// Flips the sign bit, as scalar negation does.
+            #[inline(always)]
+            fn neg(self) -> Self {
+                Self(avx!($xor(self.0, $set1(-0.0))))
+            }
+        }
+    };
+    (two $ty:ident; $xor:ident, $set1:ident) => {
+        impl std::ops::Neg for $ty {
+            type Output = Self;
+            /// Flips the sign bit, as scalar negation does.
+            #[inline(always)]
+            fn neg(self) -> Self {
+                let sign = avx!($set1(-0.0));
+                Self([avx!($xor(self.0[0], sign)), avx!($xor(self.0[1], sign))])
+            }
+        }
+    };
+}
+
+/// Defines the ordered comparison methods of a float lane type (inside its
+/// `impl`), each returning the [`Mask16`] of the lanes where it holds:
+/// `compare!(one _mm512_cmp_ps_mask; /// doc lt, _CMP_LT_OQ; …)` for a type
+/// wrapping one register, `compare!(two _mm512_cmp_pd_mask; …)` for one
+/// wrapping two (the first register's mask in the low byte).
+macro_rules! compare {
+    (one $cmp:ident; $(#[$doc:meta] $method:ident, $predicate:ident;)*) => {
+        $(
+            #[$doc]
+            #[inline(always)]
+            pub fn $method(self, o: Self) -> Mask16 {
+                Mask16(avx!($cmp::<$predicate>(self.0, o.0)))
+            }
+        )*
+    };
+    (two $cmp:ident; $(#[$doc:meta] $method:ident, $predicate:ident;)*) => {
+        $(
+            #[$doc]
+            #[inline(always)]
+            pub fn $method(self, o: Self) -> Mask16 {
+                let lo = avx!($cmp::<$predicate>(self.0[0], o.0[0]));
+                let hi = avx!($cmp::<$predicate>(self.0[1], o.0[1]));
+                Mask16(u16::from(lo) | u16::from(hi) << 8)
+            }
+        )*
+    };
+}
+
+/// Defines `clamp` for a float lane type (inside its `impl`), from its
+/// `select`, `lt` and `gt`: the scalar type's `clamp` per lane (`lo` below
+/// it, `hi` above it, NaN stays NaN), the same two comparisons in the same
+/// order.
+macro_rules! clamp {
+    ($scalar:literal) => {
+        #[doc = concat!("Rust's `", $scalar, "::clamp`: `lo` below it, `hi` above it, NaN stays NaN.")]
+        #[inline(always)]
+        pub fn clamp(self, lo: Self, hi: Self) -> Self {
+            let x = Self::select(self.lt(lo), lo, self);
+            Self::select(x.gt(hi), hi, x)
+        }
+    };
+}
+
 mod f32x16;
 mod f64x16;
 mod u32x16;

@@ -1,7 +1,7 @@
 //! Sixteen `u32` lanes (wrapping arithmetic, as `u32::wrapping_*`).
 
 use std::arch::x86_64::*;
-use std::ops::{Add, BitAnd, BitOr, BitXor, Mul, Shl, Shr, Sub};
+use std::ops::{Shl, Shr};
 
 use super::{Avx512, LANES, Mask16};
 
@@ -9,24 +9,14 @@ use super::{Avx512, LANES, Mask16};
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct U32x16(pub(super) __m512i);
 
-macro_rules! binary {
-    ($trait:ident, $method:ident, $intrinsic:ident) => {
-        impl $trait for U32x16 {
-            type Output = Self;
-            #[inline(always)]
-            fn $method(self, o: Self) -> Self {
-                Self(avx!($intrinsic(self.0, o.0)))
-            }
-        }
-    };
-}
-
-binary!(Add, add, _mm512_add_epi32);
-binary!(Sub, sub, _mm512_sub_epi32);
-binary!(Mul, mul, _mm512_mullo_epi32);
-binary!(BitAnd, bitand, _mm512_and_si512);
-binary!(BitOr, bitor, _mm512_or_si512);
-binary!(BitXor, bitxor, _mm512_xor_si512);
+binary!(one U32x16;
+    Add, add, _mm512_add_epi32;
+    Sub, sub, _mm512_sub_epi32;
+    Mul, mul, _mm512_mullo_epi32;
+    BitAnd, bitand, _mm512_and_si512;
+    BitOr, bitor, _mm512_or_si512;
+    BitXor, bitxor, _mm512_xor_si512;
+);
 
 impl Shr<u32> for U32x16 {
     type Output = Self;
@@ -106,19 +96,26 @@ impl U32x16 {
         Mask16(avx!(_mm512_cmpeq_epu32_mask(self.0, o.0)))
     }
 
+    /// Panics unless every lane of `m` holds an index below `len` (the
+    /// length of the table a gather reads) and below `i32::MAX` (the
+    /// gathers read signed indices): what makes the `gather` methods' reads
+    /// in bounds.
+    #[inline(always)]
+    pub(super) fn assert_gather_indices(self, m: Mask16, len: usize) {
+        let len = u32::try_from(len).unwrap_or(u32::MAX).min(i32::MAX as u32);
+        assert!(
+            (self.lt(Self(avx!(_mm512_set1_epi32(len as i32)))) | !m).all(),
+            "gather index out of bounds"
+        );
+    }
+
     /// `table[index]` in the lanes of `m`, `fallback` in the others.
     ///
     /// # Panics
     /// If an index of a lane in `m` is out of bounds.
     #[inline(always)]
     pub fn gather(table: &[u32], index: Self, m: Mask16, fallback: Self) -> Self {
-        let len = u32::try_from(table.len())
-            .unwrap_or(u32::MAX)
-            .min(i32::MAX as u32);
-        assert!(
-            (index.lt(Self(avx!(_mm512_set1_epi32(len as i32)))) | !m).all(),
-            "gather index out of bounds"
-        );
+        index.assert_gather_indices(m, table.len());
         // Every lane read (those of `m`) indexes `table` in bounds (asserted
         // above, and below `i32::MAX`, so the signed indices are the same).
         Self(avx!(_mm512_mask_i32gather_epi32::<4>(

@@ -2,7 +2,7 @@
 //! `u64::wrapping_*`), for the sampler's 64-bit hashes.
 
 use std::arch::x86_64::*;
-use std::ops::{Add, BitXor, Mul, Shr};
+use std::ops::Shr;
 
 use super::{Avx512, LANES, Mask16, U32x16};
 
@@ -11,24 +11,11 @@ use super::{Avx512, LANES, Mask16, U32x16};
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct U64x16(pub(super) [__m512i; 2]);
 
-macro_rules! binary {
-    ($trait:ident, $method:ident, $intrinsic:ident) => {
-        impl $trait for U64x16 {
-            type Output = Self;
-            #[inline(always)]
-            fn $method(self, o: Self) -> Self {
-                Self([
-                    avx!($intrinsic(self.0[0], o.0[0])),
-                    avx!($intrinsic(self.0[1], o.0[1])),
-                ])
-            }
-        }
-    };
-}
-
-binary!(Add, add, _mm512_add_epi64);
-binary!(Mul, mul, _mm512_mullo_epi64);
-binary!(BitXor, bitxor, _mm512_xor_si512);
+binary!(two U64x16;
+    Add, add, _mm512_add_epi64;
+    Mul, mul, _mm512_mullo_epi64;
+    BitXor, bitxor, _mm512_xor_si512;
+);
 
 impl Shr<u32> for U64x16 {
     type Output = Self;
@@ -101,10 +88,7 @@ impl U64x16 {
     /// If `src` holds fewer values than `m` has lanes.
     #[inline(always)]
     pub fn expand_from(self, m: Mask16, src: &[u64]) -> Self {
-        assert!(
-            src.len() >= m.count() as usize,
-            "expanding load past the slice"
-        );
+        m.assert_expand_len(src.len());
         let (lo, hi) = (m.0 as u8, (m.0 >> 8) as u8);
         let rest = &src[lo.count_ones() as usize..];
         // Each load reads as many consecutive `u64`s as its half of `m` has
@@ -130,13 +114,7 @@ impl U64x16 {
     /// If an index of a lane in `m` is out of bounds.
     #[inline(always)]
     pub fn gather(table: &[u64], index: U32x16, m: Mask16, fallback: Self) -> Self {
-        let len = u32::try_from(table.len())
-            .unwrap_or(u32::MAX)
-            .min(i32::MAX as u32);
-        assert!(
-            (index.lt(U32x16(avx!(_mm512_set1_epi32(len as i32)))) | !m).all(),
-            "gather index out of bounds"
-        );
+        index.assert_gather_indices(m, table.len());
         let (lo, hi) = (m.0 as u8, (m.0 >> 8) as u8);
         // Every lane read (those of `m`) indexes `table` in bounds (asserted
         // above, and below `i32::MAX`, so the signed indices are the same).

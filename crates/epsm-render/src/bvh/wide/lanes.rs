@@ -18,7 +18,7 @@ use super::super::flat::{FlatBvh, FlatHit};
 use super::super::node::{Avx, TraceRay};
 use super::super::{Accel, Found, NO_WORLD_INDEX};
 use crate::frame::Frame;
-use crate::hit::{Hit, Hits16, SurfacePoint, TexCoords};
+use crate::hit::{Hit, SurfacePoint, TexCoords};
 use crate::ray::{Ray, Rays16};
 use crate::scene::Object;
 use crate::simd::{Avx512, LANES, Mask16};
@@ -181,22 +181,4 @@ impl PlainRays {
             t_max: self.t_max[i],
         }
     }
-}
-
-/// The hits of the lanes (`None` outside `found`), as plain values.
-#[inline(always)]
-pub(super) fn hit_lanes(hits: &Hits16) -> [Option<Hit>; LANES] {
-    let (object, triangle) = (hits.object.to_array(), hits.triangle.to_array());
-    let (b1, b2, t) = (hits.b1.to_array(), hits.b2.to_array(), hits.t.to_array());
-    let world_index = hits.world_index.to_array();
-    std::array::from_fn(|i| {
-        hits.found.test(i).then_some(Hit {
-            object: object[i],
-            triangle: triangle[i],
-            b1: b1[i],
-            b2: b2[i],
-            t: t[i],
-            world_index: world_index[i],
-        })
-    })
 }

@@ -168,7 +168,7 @@ impl Accel {
             };
         }
         if !self.tlas.slots.is_empty() && active.any() {
-            let (rays, best) = (lanes::PlainRays::new(rays), lanes::hit_lanes(&hits));
+            let (rays, best) = (lanes::PlainRays::new(rays), hits.to_lanes());
             let lanes = std::array::from_fn(|i| (active.test(i), rays.lane(i), best[i]));
             hits = Hits16::from_lanes(k, &self.instances_per_lane::<false>(k, &lanes));
         }
@@ -252,7 +252,7 @@ impl Accel {
         }
         let rest = hits.found.and_not(done);
         if rest.any() {
-            let lanes = lanes::hit_lanes(hits);
+            let lanes = hits.to_lanes();
             let lanes = std::array::from_fn(|i| lanes[i].filter(|_| rest.test(i)));
             let scalar = SurfacePoints16::from_lanes(k, &self.points_per_lane(k, objects, &lanes));
             out = points::select(rest, &scalar, &out);

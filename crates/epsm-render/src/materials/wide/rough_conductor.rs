@@ -28,7 +28,7 @@ pub(super) fn sample(
     let (m, visible) = sample_visible(k, alpha, wi, u, lanes.and_not(wi.z.le(zero)));
     let cos_im = wi.dot(m);
     let wo = reflect(k, wi, m);
-    let pdf = g1(k, alpha, wi) * d(k, alpha, m) / (F32x16::splat(k, 4.0) * wi.z);
+    let pdf = reflection_pdf(k, alpha, wi, m);
     let lambda_i = lambda(k, alpha, wi);
     let g2_over_g1 = (one + lambda_i) / (one + lambda_i + lambda(k, alpha, wo));
     let found = visible.and_not(cos_im.le(zero) | wo.z.le(zero)) & pdf.gt(zero) & pdf.is_finite();
@@ -54,9 +54,7 @@ pub(super) fn eval(
     lanes: Mask16,
 ) -> Vec3x16 {
     let zero = F32x16::splat(k, 0.0);
-    let (m, reflects) = half_vector(k, wi, wo);
-    let lanes = lanes & reflects;
-    let alpha = Materials16::param(&t.alpha, k, material, lanes);
+    let (m, lanes, alpha) = reflection(t, k, material, wi, wo, lanes);
     let f = d(k, alpha, m) * g2(k, alpha, wi, wo) / (F32x16::splat(k, 4.0) * wi.z);
     Vec3x16::select(
         lanes,
@@ -76,12 +74,37 @@ pub(super) fn pdf(
     wo: Vec3x16,
     lanes: Mask16,
 ) -> F32x16 {
-    let zero = F32x16::splat(k, 0.0);
+    let (m, lanes, alpha) = reflection(t, k, material, wi, wo, lanes);
+    F32x16::select(
+        lanes,
+        reflection_pdf(k, alpha, wi, m),
+        F32x16::splat(k, 0.0),
+    )
+}
+
+/// What `eval` and `pdf` start with: the half vector of `wi` and `wo`, the
+/// `lanes` where it exists ([`half_vector`]), and the roughness of those
+/// lanes' materials.
+#[inline(always)]
+fn reflection(
+    t: &Materials16,
+    k: Avx512,
+    material: U32x16,
+    wi: Vec3x16,
+    wo: Vec3x16,
+    lanes: Mask16,
+) -> (Vec3x16, Mask16, F32x16) {
     let (m, reflects) = half_vector(k, wi, wo);
     let lanes = lanes & reflects;
-    let alpha = Materials16::param(&t.alpha, k, material, lanes);
-    let pdf = g1(k, alpha, wi) * d(k, alpha, m) / (F32x16::splat(k, 4.0) * wi.z);
-    F32x16::select(lanes, pdf, zero)
+    (m, lanes, Materials16::param(&t.alpha, k, material, lanes))
+}
+
+/// The solid-angle pdf of sampling the reflection about the visible normal
+/// `m` from `wi`: `G1(wi) · D(m) / (4 wi.z)`, as the scalar `sample` and
+/// `pdf` compute it.
+#[inline(always)]
+fn reflection_pdf(k: Avx512, alpha: F32x16, wi: Vec3x16, m: Vec3x16) -> F32x16 {
+    g1(k, alpha, wi) * d(k, alpha, m) / (F32x16::splat(k, 4.0) * wi.z)
 }
 
 /// The reflection half vector, and the lanes where it exists (both

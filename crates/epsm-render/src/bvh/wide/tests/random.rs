@@ -12,6 +12,7 @@ use glam::{DAffine3, DQuat, DVec3, Vec2, Vec3};
 
 use super::{Tally, compare, token};
 use crate::bvh::Accel;
+use crate::bvh::test_support::push_soup_triangle;
 use crate::ray::Ray;
 use crate::scene::{Mesh, Object, ObjectId, Surface};
 use crate::simd::{LANES, Mask16};
@@ -25,21 +26,9 @@ fn soup(rng: &mut Rng, count: usize, normals: usize, uvs: bool) -> Mesh {
     let mut mesh = Mesh::default();
     let unit = |rng: &mut Rng| rng.unit().as_vec3();
     for i in 0..count {
-        let a = rng.dvec3(-1.0, 1.0).as_vec3();
-        let b = a + rng.dvec3(-0.4, 0.4).as_vec3();
-        let c = match i % 7 {
-            0 | 3 => a + (b - a) * rng.range(0.1, 0.9) as f32 + rng.dvec3(-1e-5, 1e-5).as_vec3(),
-            5 => a + (b - a) * 0.5,
-            _ => a + rng.dvec3(-0.4, 0.4).as_vec3(),
-        };
-        let base = mesh.positions.len() as u32;
-        mesh.positions.extend([a, b, c]);
-        mesh.indices.push([base, base + 1, base + 2]);
-        if i % 4 == 1 {
-            mesh.positions.push(c + rng.dvec3(-0.3, 0.3).as_vec3());
-            mesh.indices.push([base + 2, base + 1, base + 3]);
-        }
-        let added = mesh.positions.len() - base as usize;
+        let base = mesh.positions.len();
+        push_soup_triangle(rng, &mut mesh, i);
+        let added = mesh.positions.len() - base;
         let n = unit(rng);
         for _ in 0..added {
             match normals {
