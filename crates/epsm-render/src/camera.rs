@@ -20,6 +20,8 @@
 use glam::{DMat3, DVec2, DVec3, Vec2, Vec3};
 
 use crate::Ray;
+#[cfg(target_arch = "x86_64")]
+use crate::simd::{Avx512, F32x16, Vec3x16};
 
 /// A perspective camera. Geometry is kept in `f64` (it is differentiated);
 /// ray generation uses a cached `f32` basis.
@@ -172,6 +174,25 @@ impl FilmRays {
         let sy = (1.0 - 2.0 * film.y / self.size.y) * self.th;
         let dir = self.forward + self.right * sx + self.up * sy;
         Ray::new(self.origin, dir.normalize())
+    }
+
+    /// The origin of every primary ray: the camera's position.
+    #[inline]
+    pub fn origin(&self) -> Vec3 {
+        self.origin
+    }
+
+    /// The directions of [`FilmRays::ray`] in every lane (the same
+    /// operations, so the same directions bit for bit; the origin is
+    /// [`FilmRays::origin`]): the lanes' film positions' `x` and `y` in,
+    /// unit directions out.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    pub(crate) fn rays16(&self, k: Avx512, film: [F32x16; 2]) -> Vec3x16 {
+        let sx = (k.f32(2.0) * film[0] / k.f32(self.size.x) - k.f32(1.0)) * k.f32(self.th_aspect);
+        let sy = (k.f32(1.0) - k.f32(2.0) * film[1] / k.f32(self.size.y)) * k.f32(self.th);
+        let dir = k.vec3(self.forward) + k.vec3(self.right) * sx + k.vec3(self.up) * sy;
+        dir.normalize(k)
     }
 }
 

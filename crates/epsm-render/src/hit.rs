@@ -19,7 +19,11 @@
 use glam::{Affine3A, DAffine3, DMat3, DVec3, Mat3A, Vec2, Vec3};
 
 use crate::frame::Frame;
+#[cfg(target_arch = "x86_64")]
+use crate::frame::Frames16;
 use crate::scene::{Mesh, Object, ObjectId};
+#[cfg(target_arch = "x86_64")]
+use crate::simd::{Avx512, F32x16, LANES, Mask16, U32x16, Vec3x16};
 use crate::sphere::MissTest;
 
 /// A ray hit as the BVH reports it.
@@ -352,4 +356,162 @@ pub fn intersect_triangle_f64(
         b2: dir.dot(qvec) * inv,
     };
     (hit.t.is_finite() && hit.b1.is_finite() && hit.b2.is_finite()).then_some(hit)
+}
+
+/// Sixteen [`Hit`]s, one per lane, as the wide walks return them; lanes
+/// outside `found` hold no hit (their other fields are unspecified).
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Hits16 {
+    /// Lanes whose ray hit something.
+    pub found: Mask16,
+    /// The object hit.
+    pub object: U32x16,
+    /// The triangle hit (0 on an exact sphere).
+    pub triangle: U32x16,
+    /// Local coordinates on it (module docs).
+    pub b1: F32x16,
+    /// Local coordinates on it (module docs).
+    pub b2: F32x16,
+    /// Ray parameter, in units of the ray's direction.
+    pub t: F32x16,
+    /// [`Hit`]'s index in the static BVH's shading data.
+    pub world_index: U32x16,
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Hits16 {
+    #[cfg(test)]
+    /// Lane `lane` as a [`Hit`] (`None` outside `found`).
+    #[inline(always)]
+    pub fn lane(&self, lane: usize) -> Option<Hit> {
+        self.found.test(lane).then(|| Hit {
+            object: self.object.lane(lane),
+            triangle: self.triangle.lane(lane),
+            b1: self.b1.lane(lane),
+            b2: self.b2.lane(lane),
+            t: self.t.lane(lane),
+            world_index: self.world_index.lane(lane),
+        })
+    }
+
+    /// The hits of the lanes (`None` outside `found`), as plain values.
+    #[inline(always)]
+    pub fn to_lanes(self) -> [Option<Hit>; LANES] {
+        let (object, triangle) = (self.object.to_array(), self.triangle.to_array());
+        let (b1, b2, t) = (self.b1.to_array(), self.b2.to_array(), self.t.to_array());
+        let world_index = self.world_index.to_array();
+        std::array::from_fn(|i| {
+            self.found.test(i).then_some(Hit {
+                object: object[i],
+                triangle: triangle[i],
+                b1: b1[i],
+                b2: b2[i],
+                t: t[i],
+                world_index: world_index[i],
+            })
+        })
+    }
+
+    /// The lanes of `hits` (`None`: not found, and zeros).
+    #[inline(always)]
+    pub fn from_lanes(k: Avx512, hits: &[Option<Hit>; LANES]) -> Self {
+        let mut found = Mask16::NONE;
+        let (mut object, mut triangle, mut world_index) = ([0; LANES], [0; LANES], [0; LANES]);
+        let (mut b1, mut b2, mut t) = ([0.0; LANES], [0.0; LANES], [0.0; LANES]);
+        for (lane, h) in hits.iter().enumerate() {
+            if let Some(h) = h {
+                found.0 |= 1 << lane;
+                (object[lane], triangle[lane], world_index[lane]) =
+                    (h.object, h.triangle, h.world_index);
+                (b1[lane], b2[lane], t[lane]) = (h.b1, h.b2, h.t);
+            }
+        }
+        Self {
+            found,
+            object: U32x16::from_array(k, object),
+            triangle: U32x16::from_array(k, triangle),
+            b1: F32x16::from_array(k, b1),
+            b2: F32x16::from_array(k, b2),
+            t: F32x16::from_array(k, t),
+            world_index: U32x16::from_array(k, world_index),
+        }
+    }
+}
+
+/// Sixteen [`TexCoords`], one per lane: lanes in `sphere` hold a
+/// [`TexCoords::Sphere`] point in `a`, the others a [`TexCoords::Uv`] in
+/// `a.x`, `a.y`.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct TexCoords16 {
+    /// Lanes on exact spheres.
+    pub sphere: Mask16,
+    /// The coordinates (see the type).
+    pub a: Vec3x16,
+}
+
+#[cfg(target_arch = "x86_64")]
+impl TexCoords16 {
+    /// Lane `lane` as [`TexCoords`].
+    #[inline(always)]
+    pub fn lane(&self, lane: usize) -> TexCoords {
+        let a = self.a.lane(lane);
+        if self.sphere.test(lane) {
+            TexCoords::Sphere(a)
+        } else {
+            TexCoords::Uv(Vec2::new(a.x, a.y))
+        }
+    }
+}
+
+/// Sixteen [`SurfacePoint`]s, one per lane.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct SurfacePoints16 {
+    /// Positions, world space.
+    pub p: Vec3x16,
+    /// Unit geometric normals, world space.
+    pub ng: Vec3x16,
+    /// Texture coordinates.
+    pub uv: TexCoords16,
+    /// Shading frames (`frame.n` the shading normal).
+    pub frame: Frames16,
+}
+
+#[cfg(target_arch = "x86_64")]
+impl SurfacePoints16 {
+    /// The points of `points`, lane `i` from `points[i]`.
+    #[inline(always)]
+    pub fn from_lanes(k: Avx512, points: &[SurfacePoint; LANES]) -> Self {
+        let mut sphere = Mask16::NONE;
+        let a = points.map(|sp| match sp.uv {
+            TexCoords::Uv(uv) => uv.extend(0.0),
+            TexCoords::Sphere(p) => p,
+        });
+        for (lane, sp) in points.iter().enumerate() {
+            sphere.0 |= u16::from(matches!(sp.uv, TexCoords::Sphere(_))) << lane;
+        }
+        Self {
+            p: Vec3x16::from_lanes(k, &points.map(|sp| sp.p)),
+            ng: Vec3x16::from_lanes(k, &points.map(|sp| sp.ng)),
+            uv: TexCoords16 {
+                sphere,
+                a: Vec3x16::from_lanes(k, &a),
+            },
+            frame: Frames16::from_lanes(k, &points.map(|sp| sp.frame)),
+        }
+    }
+
+    #[cfg(test)]
+    /// Lane `lane` as a [`SurfacePoint`].
+    #[inline(always)]
+    pub fn lane(&self, lane: usize) -> SurfacePoint {
+        SurfacePoint {
+            p: self.p.lane(lane),
+            ng: self.ng.lane(lane),
+            uv: self.uv.lane(lane),
+            frame: self.frame.lane(lane),
+        }
+    }
 }

@@ -5,6 +5,12 @@
 //! and the path records the differentiation side (`epsm-core`) consumes. This
 //! crate knows nothing about derivatives of geometry.
 //!
+//! On x86-64 CPUs with AVX-512 the tracer renders sixteen paths at once, one
+//! per vector lane: the private module `simd` holds the lane types, and a
+//! `wide` module beside each layer (sampler, BVH, materials, lights, tracer)
+//! its sixteen-lane steps, each lane bit-identical to the scalar step (see
+//! [`tracer`]).
+//!
 //! ## Conventions
 //! - **Space**: right-handed world space, `+y` up by default (the camera's `up`
 //!   decides). Lengths are in scene units (any unit, used consistently).
@@ -47,6 +53,8 @@ pub mod ray;
 pub mod record;
 pub mod sampler;
 pub mod scene;
+#[cfg(target_arch = "x86_64")]
+mod simd;
 pub mod sphere;
 pub mod tracer;
 

@@ -44,10 +44,14 @@
 //! the numbers are bit-identical either way (`avx2.rs`; 6 % fewer
 //! instructions per sample on `scenes/cornell-box.toml`).
 
+use std::ops::{BitAnd, BitXor, Shr};
+
 use glam::Vec2;
 
 #[cfg(target_arch = "x86_64")]
 mod avx2;
+#[cfg(target_arch = "x86_64")]
+pub(crate) mod wide;
 
 /// The sample-independent part of one pixel's streams (its stratified
 /// dimensions' permutation keys and the stratum count), computed once and
@@ -120,14 +124,10 @@ impl PixelKeys {
     /// The three rounds of stratified dimension `dim`'s permutation on
     /// `0..=mask` (module docs), applied once to `i`.
     #[inline(always)]
-    fn rounds(&self, mut i: u32, dim: usize) -> u32 {
-        let [r0, r1, r2] = self.shifts;
-        i = (i ^ self.xor[0][dim]).wrapping_mul(self.mul[0][dim]) & self.mask;
-        i ^= i >> r0;
-        i = (i ^ self.xor[1][dim]).wrapping_mul(self.mul[1][dim]) & self.mask;
-        i ^= i >> r1;
-        i = (i ^ self.xor[2][dim]).wrapping_mul(PERMUTE_MUL) & self.mask;
-        i ^ (i >> r2)
+    fn rounds(&self, i: u32, dim: usize) -> u32 {
+        let xor = [self.xor[0][dim], self.xor[1][dim], self.xor[2][dim]];
+        let mul = [self.mul[0][dim], self.mul[1][dim], PERMUTE_MUL];
+        permute(i, xor, mul, self.mask, self.shifts)
     }
 
     /// Walks `i`, the rounds' image of a sample, on through the rounds of
@@ -211,6 +211,36 @@ impl PixelSampler<'_> {
     pub fn get_2d(&self, dim: u32) -> Vec2 {
         Vec2::new(self.get_1d(dim), self.get_1d(dim + 1))
     }
+}
+
+/// The integer words the permutation rounds run on: one `u32`, or sixteen
+/// lanes of them (module `wide`).
+pub(crate) trait Word:
+    Copy + BitXor<Output = Self> + BitAnd<Output = Self> + Shr<u32, Output = Self>
+{
+    /// The wrapping product.
+    fn times(self, other: Self) -> Self;
+}
+
+impl Word for u32 {
+    #[inline(always)]
+    fn times(self, other: Self) -> Self {
+        self.wrapping_mul(other)
+    }
+}
+
+/// The three rounds of a permutation of `0..=mask` (module docs), applied
+/// once to `i`: round `r` xors key `xor[r]` in, multiplies by the odd
+/// `mul[r]`, keeps the bits of `mask` and xors in the result shifted right
+/// by `shifts[r]`.
+#[inline(always)]
+pub(crate) fn permute<W: Word>(i: W, xor: [W; 3], mul: [W; 3], mask: W, shifts: [u32; 3]) -> W {
+    let mut i = i;
+    for r in 0..3 {
+        i = (i ^ xor[r]).times(mul[r]) & mask;
+        i = i ^ (i >> shifts[r]);
+    }
+    i
 }
 
 /// Dimensions per [`Block`].
@@ -299,10 +329,13 @@ const MIX_WEYL: u64 = 0xD6E8_FEB8_6659_FD93;
 /// A 64-bit finaliser (Stafford's variant 13 of MurmurHash3's fmix64).
 #[inline]
 fn mix64(mut z: u64) -> u64 {
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z = (z ^ (z >> 30)).wrapping_mul(MIX64[0]);
+    z = (z ^ (z >> 27)).wrapping_mul(MIX64[1]);
     z ^ (z >> 31)
 }
+
+/// [`mix64`]'s two multipliers.
+const MIX64: [u64; 2] = [0xBF58_476D_1CE4_E5B9, 0x94D0_49BB_1331_11EB];
 
 #[cfg(test)]
 mod tests {

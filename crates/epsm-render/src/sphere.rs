@@ -83,11 +83,11 @@ pub fn intersect(origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<f6
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct MissTest {
     /// `c`, world space.
-    center: Vec3A,
+    pub(crate) center: Vec3A,
     /// `1.002 (σ + 64 ε κ² |c|)²` (∞: never rejects).
-    r2: f32,
+    pub(crate) r2: f32,
     /// `10⁻⁵ κ⁴`.
-    k: f32,
+    pub(crate) k: f32,
 }
 
 impl MissTest {

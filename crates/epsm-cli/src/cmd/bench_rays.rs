@@ -17,6 +17,9 @@
 //! them: the walks without the shading between them, on the ray
 //! distribution of the path tracer itself. The walks are compiled as the
 //! render's tile loop is (`Accel::closest_hit`: AVX2 where the CPU has it).
+//! Each set is then walked again by the batch walks (`Accel::closest_hits`,
+//! `Accel::occluded_rays`: sixteen rays at a time where the CPU has
+//! AVX-512), reported beside the scalar rate.
 //!
 //! Each run walks its ray set again until 0.2 s have passed and reports
 //! the time per pass (a render's camera rays alone take a few
@@ -104,6 +107,17 @@ struct Throughput {
     /// core, insensitive to other processes taking the cores.
     mrays_per_cpu_s: Option<f64>,
     hit_fraction: f64,
+    /// With `--scene`: the same rays through the batch walks
+    /// (`Accel::closest_hits`, `Accel::occluded_rays`), else absent.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    batched_mrays_per_s: Option<f64>,
+    /// The batch walks' rays per CPU-second (with `--scene`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    batched_mrays_per_cpu_s: Option<f64>,
+    /// The batch walks' fraction of hits (with `--scene`; the scalar one
+    /// but for ties, see `Accel::closest_hits`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    batched_hit_fraction: Option<f64>,
 }
 
 /// Everything measured.
@@ -124,6 +138,10 @@ struct Report {
     #[serde(skip_serializing_if = "Option::is_none")]
     tlas_update_seconds: Option<f64>,
     accel_bytes: usize,
+    /// Whether the batch walks ran sixteen rays at a time (the CPU has
+    /// AVX-512; with `--scene`, else absent).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    batched_wide: Option<bool>,
     throughput: Vec<Throughput>,
 }
 
@@ -159,7 +177,8 @@ pub fn run(args: &RaysBenchArgs) -> anyhow::Result<()> {
                 build_seconds: stats.build_seconds,
                 tlas_update_seconds: None,
                 accel_bytes: stats.bytes,
-                throughput: throughputs(scene.accel(), &sets, args)?,
+                batched_wide: Some(Accel::batches_wide()),
+                throughput: throughputs(scene.accel(), &sets, args, true)?,
             };
             print(&report, args.json)
         }
@@ -258,17 +277,19 @@ fn sphere(args: &RaysBenchArgs) -> anyhow::Result<()> {
         build_seconds,
         tlas_update_seconds: Some(tlas_update_seconds),
         accel_bytes: stats.bytes,
-        throughput: throughputs(&accel, &sets, args)?,
+        batched_wide: None,
+        throughput: throughputs(&accel, &sets, args, false)?,
     };
     print(&report, args.json)
 }
 
 /// Each ray set's throughput on one and two threads (or `--threads`), the
-/// fastest of `--repeat` runs.
+/// fastest of `--repeat` runs; with `batched`, also through the batch walks.
 fn throughputs(
     accel: &Accel,
     sets: &[RaySet],
     args: &RaysBenchArgs,
+    batched: bool,
 ) -> anyhow::Result<Vec<Throughput>> {
     let thread_counts = args.threads.map_or(vec![1, 2], |n| vec![n]);
     // All pools live to the end: a thread exiting mid-measurement would take
@@ -284,17 +305,31 @@ fn throughputs(
             .filter(|s| !s.rays.is_empty())
             .flat_map(|s| s.queries.iter().map(move |&occlusion| (s, occlusion)));
         for (set, occlusion) in walks {
-            let runs = (0..args.repeat.max(1))
-                .map(|_| pool.install(|| measure(accel, &set.rays, occlusion)));
-            let best = runs.fold(None, |best: Option<Run>, run| match best {
-                Some(b) if b.seconds <= run.seconds => Some(b),
-                _ => Some(run),
-            });
+            let fastest = |walk: Walk| {
+                let runs = (0..args.repeat.max(1))
+                    .map(|_| pool.install(|| measure(accel, &set.rays, walk)));
+                runs.fold(None, |best: Option<Run>, run| match best {
+                    Some(b) if b.seconds <= run.seconds => Some(b),
+                    _ => Some(run),
+                })
+                .context("no run")
+            };
             let Run {
                 seconds,
                 cpu_seconds,
                 hits,
-            } = best.context("no run")?;
+            } = fastest(Walk {
+                occlusion,
+                batched: false,
+            })?;
+            let batch = if batched {
+                Some(fastest(Walk {
+                    occlusion,
+                    batched: true,
+                })?)
+            } else {
+                None
+            };
             let rays = set.rays.len() as f64;
             throughput.push(Throughput {
                 threads,
@@ -304,6 +339,9 @@ fn throughputs(
                 mrays_per_s: rays / seconds / 1e6,
                 mrays_per_cpu_s: cpu_seconds.map(|c| rays / c / 1e6),
                 hit_fraction: hits as f64 / rays,
+                batched_mrays_per_s: batch.map(|b| rays / b.seconds / 1e6),
+                batched_mrays_per_cpu_s: batch.and_then(|b| b.cpu_seconds).map(|c| rays / c / 1e6),
+                batched_hit_fraction: batch.map(|b| b.hits as f64 / rays),
             });
         }
     }
@@ -330,9 +368,28 @@ fn print(report: &Report, json: bool) -> anyhow::Result<()> {
         report.build_seconds * 1e3,
         report.accel_bytes as f64 / 1e6
     );
+    if let Some(wide) = report.batched_wide {
+        let how = if wide {
+            "16 rays at a time (AVX-512)"
+        } else {
+            "one at a time (no AVX-512)"
+        };
+        println!("batched: the same rays through Accel::closest_hits / occluded_rays, {how}");
+    }
     for t in &report.throughput {
+        let batched = t
+            .batched_mrays_per_s
+            .map(|b| {
+                format!(
+                    "; batched {:6.2} Mrays/s, {:6.2} Mrays/CPU-s ({:.0}% hit)",
+                    b,
+                    t.batched_mrays_per_cpu_s.unwrap_or(f64::NAN),
+                    t.batched_hit_fraction.unwrap_or(f64::NAN) * 100.0
+                )
+            })
+            .unwrap_or_default();
         println!(
-            "{} thread(s) {:>10} {:>8}: {:6.2} Mrays/s, {:6.2} Mrays/CPU-s ({:.0}% hit, {} rays)",
+            "{} thread(s) {:>10} {:>8}: {:6.2} Mrays/s, {:6.2} Mrays/CPU-s ({:.0}% hit, {} rays){batched}",
             t.threads,
             t.rays,
             t.query,
@@ -364,29 +421,41 @@ pub(super) fn cpu_seconds() -> Option<f64> {
     Some(total as f64 * 1e-9)
 }
 
+/// How a set of rays is walked.
+#[derive(Clone, Copy)]
+struct Walk {
+    /// Occlusion (`true`) or closest hit.
+    occlusion: bool,
+    /// Through the batch walks (`Accel::closest_hits`,
+    /// `Accel::occluded_rays`) rather than ray by ray.
+    batched: bool,
+}
+
+/// The hits among `chunk` by `walk`.
+fn hits_of(accel: &Accel, chunk: &[Ray], walk: Walk) -> usize {
+    match (walk.occlusion, walk.batched) {
+        (true, false) => chunk.iter().filter(|ray| accel.occluded(ray)).count(),
+        (false, false) => chunk
+            .iter()
+            .filter(|ray| accel.closest_hit(ray).is_some())
+            .count(),
+        (true, true) => accel.occluded_rays(chunk).iter().filter(|&&o| o).count(),
+        (false, true) => accel.closest_hits(chunk).iter().flatten().count(),
+    }
+}
+
 /// Traces all rays in parallel chunks, in passes over the whole set until
 /// [`MIN_RUN_SECONDS`] have passed (a set of a few milliseconds, such as a
 /// small render's camera rays, would otherwise time thread start-up more
 /// than walks).
-fn measure(accel: &Accel, rays: &[Ray], occlusion: bool) -> Run {
+fn measure(accel: &Accel, rays: &[Ray], walk: Walk) -> Run {
     let cpu_start = cpu_seconds();
     let start = Instant::now();
     let (mut passes, mut hits) = (0u32, 0);
     while passes == 0 || start.elapsed().as_secs_f64() < MIN_RUN_SECONDS {
         hits = rays
             .par_chunks(1024)
-            .map(|chunk| {
-                chunk
-                    .iter()
-                    .filter(|ray| {
-                        if occlusion {
-                            accel.occluded(ray)
-                        } else {
-                            accel.closest_hit(ray).is_some()
-                        }
-                    })
-                    .count()
-            })
+            .map(|chunk| hits_of(accel, chunk, walk))
             .sum();
         passes += 1;
     }

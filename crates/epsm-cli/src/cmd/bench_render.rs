@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use epsm_render::scene::load::{MAX_DEPTH, load_scene};
-use epsm_render::tracer::{RenderOptions, render};
+use epsm_render::tracer::{Kernel, RenderOptions, render_with};
 
 use super::bench_rays::cpu_seconds;
 
@@ -25,9 +25,34 @@ pub struct RenderBenchArgs {
     /// Timed repetitions per thread count (the best is reported).
     #[arg(long, default_value_t = 3)]
     pub repeats: u32,
+    /// The bounce loop: `fastest` (the wide tracer where the CPU has
+    /// AVX-512, else the scalar one) or `scalar` (one path at a time).
+    #[arg(long, value_enum, default_value_t = KernelArg::Fastest)]
+    pub kernel: KernelArg,
     /// Print one JSON object per scene instead of text.
     #[arg(long)]
     pub json: bool,
+}
+
+/// `--kernel` values.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum KernelArg {
+    /// The wide tracer where the CPU has AVX-512, else the scalar one.
+    Fastest,
+    /// One path at a time.
+    Scalar,
+}
+
+impl KernelArg {
+    /// The tracer's kernel, and its name in the report (`wide` or `scalar`:
+    /// the one that actually runs on this CPU).
+    fn kernel(self) -> (Kernel, &'static str) {
+        match self {
+            KernelArg::Fastest if Kernel::wide_available() => (Kernel::Fastest, "wide"),
+            KernelArg::Fastest => (Kernel::Fastest, "scalar"),
+            KernelArg::Scalar => (Kernel::Scalar, "scalar"),
+        }
+    }
 }
 
 /// Runs `epsm bench render`.
@@ -41,6 +66,7 @@ pub fn run(args: &RenderBenchArgs) -> anyhow::Result<()> {
     }
     anyhow::ensure!(args.repeats >= 1, "--repeats must be at least 1");
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let (kernel, kernel_name) = args.kernel.kernel();
     for path in &args.scenes {
         let t0 = Instant::now();
         let scene = load_scene(path)?;
@@ -60,7 +86,7 @@ pub fn run(args: &RenderBenchArgs) -> anyhow::Result<()> {
             let mut best: Option<(epsm_render::tracer::RenderOutput, Option<f64>)> = None;
             for _ in 0..args.repeats.max(1) {
                 let start = cpu_seconds();
-                let out = pool.install(|| render(&scene, &opts, &|_| {}));
+                let out = pool.install(|| render_with(&scene, &opts, kernel, &|_| {}));
                 let cpu = cpu_seconds()
                     .zip(start)
                     .map(|(end, start)| end - start)
@@ -87,6 +113,7 @@ pub fn run(args: &RenderBenchArgs) -> anyhow::Result<()> {
             "resolution": [cam.width, cam.height],
             "spp": opts.spp,
             "max_depth": opts.max_depth,
+            "kernel": kernel_name,
             "load_and_build_s": load_s,
             "runs": results,
             "peak_rss_mb": super::peak_rss_mb(),

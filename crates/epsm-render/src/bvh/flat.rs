@@ -115,6 +115,21 @@ pub(crate) struct FlatHit {
     pub b2: f32,
 }
 
+/// One node of a [`FlatBvh`] as [`FlatBvh::node_parts`] shows it.
+pub(super) struct NodeParts<'a> {
+    /// The child boxes.
+    pub boxes: &'a ChildBoxes,
+    /// Per child slot: the node index of an inner child (0 for leaf and
+    /// absent children).
+    pub children: [u32; 8],
+    /// Bit `c` set when child `c` is a leaf.
+    pub leaves: u8,
+    /// Bit `c` set when child `c` is an inner node.
+    pub inner: u8,
+    /// The packets of the leaf children's triangles, in child order.
+    pub packets: &'a [TrianglePacket],
+}
+
 /// 8-wide nodes over triangle packets, root first.
 #[derive(Clone, Debug)]
 pub(crate) struct FlatBvh {
@@ -184,6 +199,21 @@ impl FlatBvh {
         }
     }
 
+    /// The nodes as other traversal layouts read them, root first (module
+    /// `wide` builds its sixteen-ray layout from them).
+    pub fn node_parts(&self) -> impl Iterator<Item = NodeParts<'_>> {
+        self.nodes.iter().map(|n| {
+            let first = n.first_packet as usize;
+            NodeParts {
+                boxes: &n.boxes,
+                children: n.children,
+                leaves: n.leaves,
+                inner: n.inner,
+                packets: &self.packets[first..first + n.packet_count as usize],
+            }
+        })
+    }
+
     /// Number of triangles.
     pub fn len(&self) -> usize {
         self.len
@@ -219,21 +249,35 @@ impl FlatBvh {
     /// before each packet test, so `ray` may come
     /// [`TraceRay::without_shear`].
     #[inline(always)]
-    #[allow(unsafe_code)]
     pub fn trace<const ANY: bool>(
         &self,
         ray: &mut TraceRay,
         boxes: impl BoxTest,
     ) -> Option<FlatHit> {
-        if self.nodes.is_empty() {
+        self.trace_from::<ANY>(0, ray, boxes)
+    }
+
+    /// [`FlatBvh::trace`] of the subtree under node `start` (a node index,
+    /// as in [`FlatBvh::node_parts`]; the packet walk of module `wide`
+    /// hands a subtree that few of its rays enter to this walk, ray by
+    /// ray).
+    #[inline(always)]
+    #[allow(unsafe_code)]
+    pub fn trace_from<const ANY: bool>(
+        &self,
+        start: usize,
+        ray: &mut TraceRay,
+        boxes: impl BoxTest,
+    ) -> Option<FlatHit> {
+        if start >= self.nodes.len() {
             return None;
         }
         let mut best = None;
         let mut stack = [MaybeUninit::<(u32, f32)>::uninit(); STACK];
         let mut depth = 0usize;
-        let mut node = 0usize;
+        let mut node = start;
         loop {
-            // SAFETY: `node` is the root (`nodes` is not empty) or a child
+            // SAFETY: `node` is `start` (below `nodes.len()`) or a child
             // index of a node, below `nodes.len()` (asserted by
             // `FlatBvh::new`; nothing changes the nodes after).
             let n = unsafe { self.nodes.get_unchecked(node) };
@@ -325,6 +369,7 @@ impl FlatBvh {
 mod tests {
     use super::*;
     use crate::bvh::Portable;
+    use crate::bvh::test_support::push_soup_triangle;
     use crate::bvh::triangle::{PackedTriangle, RayShear};
     use crate::scene::Mesh;
     use epsm_testkit::Rng;
@@ -337,23 +382,7 @@ mod tests {
     fn soup(rng: &mut Rng, count: usize) -> Mesh {
         let mut mesh = Mesh::default();
         for i in 0..count {
-            let a = rng.dvec3(-1.0, 1.0).as_vec3();
-            let b = a + rng.dvec3(-0.4, 0.4).as_vec3();
-            let c = match i % 7 {
-                0 | 3 => {
-                    a + (b - a) * rng.range(0.1, 0.9) as f32 + rng.dvec3(-1e-5, 1e-5).as_vec3()
-                }
-                5 => a + (b - a) * 0.5,
-                _ => a + rng.dvec3(-0.4, 0.4).as_vec3(),
-            };
-            let base = mesh.positions.len() as u32;
-            mesh.positions.extend([a, b, c]);
-            mesh.indices.push([base, base + 1, base + 2]);
-            if i % 4 == 1 {
-                let d = c + rng.dvec3(-0.3, 0.3).as_vec3();
-                mesh.positions.push(d);
-                mesh.indices.push([base + 2, base + 1, base + 3]);
-            }
+            push_soup_triangle(rng, &mut mesh, i);
         }
         mesh
     }

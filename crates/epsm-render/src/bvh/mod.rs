@@ -22,6 +22,13 @@
 //! code of scenes without spheres carries nothing of theirs. More spheres
 //! stand behind the top level like any instance.
 //!
+//! Many rays at once ([`Accel::closest_hits`], [`Accel::occluded_rays`],
+//! [`Accel::surface_points`], module `batch`) are traced sixteen at a time
+//! where the CPU has AVX-512 (module `wide`: the static BVH walked as a
+//! packet from tables built beside it, the listed spheres in `f64` lanes,
+//! instances lane by lane by the scalar code), with the scalar walks'
+//! answers (but for ties, module `wide`).
+//!
 //! Moving an object ([`Accel::update_instance`]) re-reads its transform and
 //! rebuilds only the top level; the first move of a static object makes it
 //! dynamic, which rebuilds the static BVH once without it
@@ -37,14 +44,19 @@
 //!
 //! No parameters.
 
+mod batch;
 mod blas;
 mod flat;
 mod node;
 mod packet;
 mod shading;
+#[cfg(test)]
+mod test_support;
 mod tlas;
 mod triangle;
 mod walk;
+#[cfg(target_arch = "x86_64")]
+mod wide;
 mod world;
 
 use std::collections::HashMap;
@@ -445,12 +457,26 @@ impl Accel {
                 return hit(found, best);
             }
         }
+        self.trace_instances::<ANY>(&mut world, found, best, boxes)
+    }
+
+    /// The end of [`Accel::trace`]: the top level's instances walked by
+    /// `world` (its `t_max` lowered to the best hit so far, `best` in
+    /// `found`), and the [`Hit`] of the best hit then.
+    #[inline(always)]
+    fn trace_instances<const ANY: bool>(
+        &self,
+        world: &mut TraceRay,
+        mut found: Found<'_>,
+        mut best: Option<FlatHit>,
+        boxes: impl BoxTest,
+    ) -> Option<Hit> {
         if self.tlas.slots.is_empty() {
             return hit(found, best);
         }
         walk(
             &self.tlas.bvh,
-            &mut world,
+            world,
             boxes,
             #[inline(always)]
             |slot, world| {

@@ -46,10 +46,10 @@ use super::triangle::RayShear;
 /// carry a relative rounding error of at most `3ε` (Ize, "Robust BVH Ray
 /// Traversal", JCGT 2013, uses `1 + 2γ₃`), so a ray touching a box is never
 /// culled, however far its origin.
-const EXIT_SCALE: f32 = 1.0 + 4.0 * f32::EPSILON;
+pub(super) const EXIT_SCALE: f32 = 1.0 + 4.0 * f32::EPSILON;
 
 /// Smallest direction magnitude used in slab tests.
-const TINY_DIR: f32 = 1e-18;
+pub(super) const TINY_DIR: f32 = 1e-18;
 
 /// A ray prepared for box tests: origin, direction, clamped reciprocal
 /// direction and `t` range, and the shear of the watertight triangle test.
@@ -258,6 +258,16 @@ impl ChildBoxes {
         Self { planes }
     }
 
+    /// The box of child `child` (`< 8`; an absent child's is inverted,
+    /// `+∞` to `−∞`).
+    pub fn child(&self, child: usize) -> Aabb {
+        let plane = |axis: usize, side: usize| self.planes[axis][side].0[child];
+        Aabb {
+            min: Vec3A::new(plane(0, 0), plane(1, 0), plane(2, 0)),
+            max: Vec3A::new(plane(0, 1), plane(1, 1), plane(2, 1)),
+        }
+    }
+
     /// The boxes `ray` enters within its `t` range, four children at a time
     /// with 128-bit vectors (SSE2 on x86-64).
     #[inline(always)]
@@ -403,6 +413,12 @@ impl Avx {
     #[inline(always)]
     pub fn detect() -> Option<Self> {
         std::arch::is_x86_feature_detected!("avx").then_some(Self(()))
+    }
+
+    /// The token on a CPU with AVX-512 (which has AVX).
+    #[inline(always)]
+    pub fn from_avx512(_: crate::simd::Avx512) -> Self {
+        Self(())
     }
 }
 

@@ -24,7 +24,7 @@ use crate::scene::Object;
 
 /// How a static triangle's shading normal is found.
 #[derive(Clone, Copy, Debug, PartialEq)]
-enum Normals {
+pub(super) enum Normals {
     /// The same unit shading normal over the whole triangle (the geometric
     /// normal without vertex normals, or three equal vertex normals): its
     /// shading frame, `Frame::from_normal(ns)`, made once.
@@ -38,19 +38,19 @@ enum Normals {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct ShadingTriangle {
     /// First vertex.
-    p0: Vec3,
+    pub(super) p0: Vec3,
     /// `p1 − p0`.
-    e1: Vec3,
+    pub(super) e1: Vec3,
     /// `p2 − p0`.
-    e2: Vec3,
+    pub(super) e2: Vec3,
     /// Unit geometric normal (already flipped toward a constant shading
     /// normal).
-    ng: Vec3,
-    normals: Normals,
+    pub(super) ng: Vec3,
+    pub(super) normals: Normals,
     /// The three vertices' texture coordinates, when the mesh has them
     /// (interpolated at the hit by [`hit::interpolate_uv`]; without them the
     /// texture coordinates are `(b1, b2)`).
-    uvs: Option<[Vec2; 3]>,
+    pub(super) uvs: Option<[Vec2; 3]>,
 }
 
 impl ShadingTriangle {

@@ -29,6 +29,8 @@ use super::blas::SlotTriangles;
 use super::flat::FlatBvh;
 use super::shading::ShadingTriangle;
 use super::triangle::PackedTriangle;
+#[cfg(target_arch = "x86_64")]
+use super::wide::World16;
 use crate::scene::{Object, ObjectId};
 
 /// Where a triangle of the static BVH comes from.
@@ -51,6 +53,10 @@ pub(crate) struct WorldBlas {
     shading: Vec<ShadingTriangle>,
     /// Input triangles left out (degenerate or singular placement).
     pub left_out: usize,
+    /// The tables of the sixteen-ray walks and shading points (module
+    /// `wide`).
+    #[cfg(target_arch = "x86_64")]
+    pub wide: World16,
 }
 
 impl WorldBlas {
@@ -89,6 +95,8 @@ impl WorldBlas {
         let bvh = FlatBvh::new(&built);
         let left_out = inputs - bvh.len();
         Some(Self {
+            #[cfg(target_arch = "x86_64")]
+            wide: World16::new(&bvh, &refs, &shading),
             bvh,
             refs,
             shading,
@@ -115,7 +123,11 @@ impl WorldBlas {
 
     /// Approximate heap size in bytes.
     pub fn bytes(&self) -> usize {
-        self.bvh.bytes()
+        #[cfg(target_arch = "x86_64")]
+        let wide = self.wide.bytes();
+        #[cfg(not(target_arch = "x86_64"))]
+        let wide = 0;
+        wide + self.bvh.bytes()
             + self.refs.len() * size_of::<TriangleRef>()
             + self.shading.len() * size_of::<ShadingTriangle>()
     }

@@ -46,15 +46,15 @@ pub struct AreaEmitter {
 /// One world-space emitting triangle: what sampling a point on it reads,
 /// in one record.
 #[derive(Clone, Copy, Debug, PartialEq)]
-struct EmitterTriangle {
+pub(super) struct EmitterTriangle {
     /// First vertex, `f32` (transformed in `f64`).
-    p0: Vec3,
+    pub(super) p0: Vec3,
     /// `p1 − p0` of the `f32` vertices.
-    e1: Vec3,
+    pub(super) e1: Vec3,
     /// `p2 − p0` of the `f32` vertices.
-    e2: Vec3,
+    pub(super) e2: Vec3,
     /// Unit front-face normal (zero for a degenerate triangle).
-    normal: Vec3,
+    pub(super) normal: Vec3,
 }
 
 /// A uniformly sampled point on an emitter.
@@ -118,6 +118,18 @@ impl AreaEmitter {
     /// degenerate object).
     pub fn pdf_area(&self) -> f64 {
         self.pdf_area
+    }
+
+    /// The world-space triangles, in mesh order.
+    #[cfg(target_arch = "x86_64")]
+    pub(super) fn triangles(&self) -> &[EmitterTriangle] {
+        &self.triangles
+    }
+
+    /// The triangle choice by area (`None` when the object has no area).
+    #[cfg(target_arch = "x86_64")]
+    pub(super) fn by_area(&self) -> Option<&Distribution1D> {
+        self.by_area.as_ref()
     }
 
     /// The unit front-face normal of `triangle`.

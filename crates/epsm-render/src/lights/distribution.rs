@@ -64,13 +64,13 @@ struct Small {
 
 /// The entry a [`Small`] count selects and its cdf bounds.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-struct SmallPick {
+pub(super) struct SmallPick {
     /// The entry (of non-zero weight unless entry 0 is the only candidate).
-    index: usize,
+    pub(super) index: usize,
     /// `cdf[index]`.
-    lo: f64,
+    pub(super) lo: f64,
     /// `cdf[index + 1]`.
-    hi: f64,
+    pub(super) hi: f64,
 }
 
 impl Small {
@@ -172,6 +172,23 @@ impl Distribution1D {
     /// Sum of the weights.
     pub fn total(&self) -> f64 {
         self.total
+    }
+
+    /// The only entry of non-zero weight, when there is exactly one (then
+    /// [`Self::sample_discrete`] needs no table).
+    #[cfg(target_arch = "x86_64")]
+    pub(super) fn single(&self) -> Option<usize> {
+        self.single
+    }
+
+    /// The [`Small`] table of a distribution of `n ≤ 16` entries: its inner
+    /// boundaries `cdf[1..n]` (sorted) and the pick of each count `0..n` of
+    /// boundaries `≤ u`, so the pick for `u` is `picks[count]`.
+    #[cfg(target_arch = "x86_64")]
+    pub(super) fn small_table(&self) -> Option<(&[f64], &[SmallPick])> {
+        let n = self.func.len();
+        let small = self.small.as_deref()?;
+        Some((&small.inner[..n - 1], &small.pick[..n]))
     }
 
     /// Probability of entry `index`.

@@ -15,6 +15,8 @@ pub mod distribution;
 pub mod envmap;
 pub mod point;
 pub mod select;
+#[cfg(target_arch = "x86_64")]
+mod wide;
 
 #[cfg(test)]
 mod tests;

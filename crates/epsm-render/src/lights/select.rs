@@ -16,16 +16,19 @@ use crate::scene::{Object, ObjectId};
 #[derive(Clone, Debug)]
 pub struct LightTable {
     /// Emissive objects.
-    area: Vec<AreaEmitter>,
+    pub(super) area: Vec<AreaEmitter>,
     /// For each object, its index in `area`.
-    emitter_of_object: Vec<Option<u32>>,
+    pub(super) emitter_of_object: Vec<Option<u32>>,
     /// Point lights.
-    points: Vec<PointLight>,
+    pub(super) points: Vec<PointLight>,
     /// The background.
-    background: Background,
+    pub(super) background: Background,
     /// Selection ∝ power over `area ++ points ++ [background]`; `None` when
     /// nothing emits.
-    selection: Option<Distribution1D>,
+    pub(super) selection: Option<Distribution1D>,
+    /// The gather tables of the sixteen-lane functions.
+    #[cfg(target_arch = "x86_64")]
+    pub(super) wide: super::wide::Tables,
 }
 
 impl Default for LightTable {
@@ -36,6 +39,8 @@ impl Default for LightTable {
             points: Vec::new(),
             background: Background::Constant(Vec3::ZERO),
             selection: None,
+            #[cfg(target_arch = "x86_64")]
+            wide: Default::default(),
         }
     }
 }
@@ -64,13 +69,21 @@ impl LightTable {
             .chain(point_lights.iter().map(PointLight::power))
             .chain(std::iter::once(background.power(bounds)))
             .collect();
-        Self {
+        let table = Self {
             area,
             emitter_of_object,
             points: point_lights.to_vec(),
             background: background.clone(),
             selection: Distribution1D::new(&powers),
-        }
+            #[cfg(target_arch = "x86_64")]
+            wide: Default::default(),
+        };
+        #[cfg(target_arch = "x86_64")]
+        let table = Self {
+            wide: super::wide::Tables::new(&table),
+            ..table
+        };
+        table
     }
 
     /// Whether the scene has no emitter of non-zero power.
@@ -78,7 +91,8 @@ impl LightTable {
         self.selection.is_none()
     }
 
-    fn background_index(&self) -> usize {
+    /// The background's selection index.
+    pub(super) fn background_index(&self) -> usize {
         self.area.len() + self.points.len()
     }
 
@@ -157,13 +171,17 @@ impl LightTable {
         let Some(&Some(index)) = self.emitter_of_object.get(object as usize) else {
             return 0.0;
         };
-        let emitter = &self.area[index as usize];
         let d = y - p;
-        if !in_front(d, emitter.normal(triangle)) {
+        if !in_front(d, self.area[index as usize].normal(triangle)) {
             return 0.0;
         }
-        let pdf_area = (self.select_pmf(index as usize) * emitter.pdf_area()) as f32;
-        solid_angle_pdf(pdf_area, d, n)
+        solid_angle_pdf(self.selected_pdf_area(index as usize), d, n)
+    }
+
+    /// The area density (m⁻²) of sampling a point of area emitter `index`,
+    /// its selection included, as [`Self::pdf_area`] uses it.
+    pub(super) fn selected_pdf_area(&self, index: usize) -> f32 {
+        (self.select_pmf(index) * self.area[index].pdf_area()) as f32
     }
 
     /// Solid-angle pdf (selection included) of sampling background direction `dir`.

@@ -19,6 +19,7 @@ use std::f32::consts::{FRAC_1_PI, FRAC_PI_4};
 
 use glam::{Vec2, Vec2Swizzles, Vec3, Vec4, Vec4Swizzles};
 
+use super::real::Real;
 use super::{BsdfSample, Lobe, Texture};
 use crate::hit::TexCoords;
 
@@ -90,7 +91,7 @@ pub fn cosine_hemisphere(u: Vec2) -> Vec3 {
         .xy()
     };
     let ratio = pick(d.yx(), d);
-    let (sin, cos) = sin_cos_quarter(FRAC_PI_4 * (ratio.y / ratio.x));
+    let (sin, cos) = sin_cos_quarter((), FRAC_PI_4 * (ratio.y / ratio.x));
     let disk = ratio.x * pick(Vec2::new(sin, cos), Vec2::new(cos, sin));
     // The centre (0/0 above) maps to itself.
     let disk = if d == Vec2::ZERO { Vec2::ZERO } else { disk };
@@ -100,15 +101,28 @@ pub fn cosine_hemisphere(u: Vec2) -> Vec3 {
 
 /// `(sin x, cos x)` for `|x| ≤ π/4` by their Taylor polynomials to degree 9
 /// and 8 (truncation error below 2e-9 and 3e-8, under an `f32` ulp of the
-/// results), a few multiply-adds instead of a libm call.
-#[inline]
-fn sin_cos_quarter(x: f32) -> (f32, f32) {
+/// results), a few multiplies and adds instead of a libm call; on one value
+/// or on sixteen lanes ([`Real`]). Each coefficient is an `f32` constant
+/// (the quotient rounded once, at compile time). (The constants are not made
+/// by a closure: that changed the scalar tracer's code generation.)
+#[inline(always)]
+pub(super) fn sin_cos_quarter<T: Real>(k: T::Token, x: T) -> (T, T) {
+    let one = T::constant(k, 1.0);
+    let (s3, s5, s7, s9) = (
+        T::constant(k, -1.0 / 6.0),
+        T::constant(k, 1.0 / 120.0),
+        T::constant(k, -1.0 / 5040.0),
+        T::constant(k, 1.0 / 362_880.0),
+    );
+    let (c2, c4, c6, c8) = (
+        T::constant(k, -0.5),
+        T::constant(k, 1.0 / 24.0),
+        T::constant(k, -1.0 / 720.0),
+        T::constant(k, 1.0 / 40_320.0),
+    );
     let x2 = x * x;
-    let sin = x
-        * (1.0
-            + x2 * (-1.0 / 6.0
-                + x2 * (1.0 / 120.0 + x2 * (-1.0 / 5040.0 + x2 * (1.0 / 362_880.0)))));
-    let cos = 1.0 + x2 * (-0.5 + x2 * (1.0 / 24.0 + x2 * (-1.0 / 720.0 + x2 * (1.0 / 40_320.0))));
+    let sin = x * (one + x2 * (s3 + x2 * (s5 + x2 * (s7 + x2 * s9))));
+    let cos = one + x2 * (c2 + x2 * (c4 + x2 * (c6 + x2 * c8)));
     (sin, cos)
 }
 
@@ -120,7 +134,7 @@ mod tests {
     fn quarter_sin_cos_matches_libm() {
         for i in -1000..=1000 {
             let x = FRAC_PI_4 * i as f32 / 1000.0;
-            let (sin, cos) = sin_cos_quarter(x);
+            let (sin, cos) = sin_cos_quarter((), x);
             let (s64, c64) = f64::from(x).sin_cos();
             assert!((f64::from(sin) - s64).abs() < 1.2e-7, "sin {x}");
             assert!((f64::from(cos) - c64).abs() < 1.2e-7, "cos {x}");

@@ -14,6 +14,8 @@
 use glam::Vec3;
 use num_traits::Float;
 
+use super::real::Real;
+
 /// Unpolarised Fresnel reflectance for incidence cosine `cos_i ∈ [0, 1]` and
 /// relative IOR `eta = η_t / η_i`. Returns 1 under total internal reflection.
 /// The renderer evaluates it in `f32`; derivatives evaluate it in `f64`
@@ -22,7 +24,7 @@ use num_traits::Float;
 pub fn fresnel_dielectric<T: Float>(cos_i: T, eta: T) -> T {
     debug_assert!(eta > T::zero());
     match amplitudes(cos_i.clamp(T::zero(), T::one()), eta) {
-        Some(a) => a.reflectance().clamp(T::zero(), T::one()),
+        Some(a) => a.reflectance(()).clamp(T::zero(), T::one()),
         None => T::one(),
     }
 }
@@ -62,43 +64,62 @@ pub fn fresnel_dielectric_rates(cos_i: f64, eta: f64) -> FresnelRates {
     let dt_dc = c / (eta * eta * cos_t);
     let dt_deta = (1.0 - c * c) / (eta * eta * eta * cos_t);
     FresnelRates {
-        f: a.reflectance(),
+        f: a.reflectance(()),
         d_cos: r_s * d_s(1.0, eta * dt_dc) + r_p * d_p(eta, dt_dc),
         d_eta: r_s * d_s(0.0, cos_t + eta * dt_deta) + r_p * d_p(c, dt_deta),
     }
 }
 
-/// The transmitted cosine and the s- and p-polarised reflection amplitudes.
+/// The transmitted cosine and the s- and p-polarised reflection amplitudes
+/// (on one value or on sixteen lanes, [`Real`]).
 #[derive(Clone, Copy)]
-struct Amplitudes<T> {
+pub(super) struct Amplitudes<T> {
+    /// `cos θt`.
     cos_t: T,
+    /// s-polarised amplitude.
     r_s: T,
+    /// p-polarised amplitude.
     r_p: T,
 }
 
-impl<T: Float> Amplitudes<T> {
-    /// The unpolarised reflectance, the mean of the two polarisations.
-    #[inline]
-    fn reflectance(&self) -> T {
-        let half = (T::one() + T::one()).recip();
-        half * (self.r_s * self.r_s + self.r_p * self.r_p)
+impl<T: Real> Amplitudes<T> {
+    /// The amplitudes at `cos_i ∈ [0, 1]` given
+    /// `sin2_t = `[`sin2_transmitted`]`(cos_i, eta) < 1` (at or above 1,
+    /// total internal reflection, the values mean nothing).
+    #[inline(always)]
+    pub(super) fn below_critical(k: T::Token, cos_i: T, eta: T, sin2_t: T) -> Self {
+        let cos_t = (T::constant(k, 1.0) - sin2_t)
+            .max(T::constant(k, 0.0))
+            .sqrt();
+        Self {
+            cos_t,
+            r_s: (cos_i - eta * cos_t) / (cos_i + eta * cos_t),
+            r_p: (eta * cos_i - cos_t) / (eta * cos_i + cos_t),
+        }
     }
+
+    /// The unpolarised reflectance, the mean of the two polarisations.
+    #[inline(always)]
+    pub(super) fn reflectance(&self, k: T::Token) -> T {
+        T::constant(k, 0.5) * (self.r_s * self.r_s + self.r_p * self.r_p)
+    }
+}
+
+/// `sin² θt = (1 − cos_i²) / eta²` (Snell's law); at or above 1 under total
+/// internal reflection.
+#[inline(always)]
+pub(super) fn sin2_transmitted<T: Real>(k: T::Token, cos_i: T, eta: T) -> T {
+    (T::constant(k, 1.0) - cos_i * cos_i) / (eta * eta)
 }
 
 /// The amplitudes at `cos_i ∈ [0, 1]`; `None` under total internal reflection.
 #[inline]
 fn amplitudes<T: Float>(cos_i: T, eta: T) -> Option<Amplitudes<T>> {
-    let one = T::one();
-    let sin2_t = (one - cos_i * cos_i) / (eta * eta);
-    if sin2_t >= one {
+    let sin2_t = sin2_transmitted((), cos_i, eta);
+    if sin2_t >= T::one() {
         return None;
     }
-    let cos_t = (one - sin2_t).max(T::zero()).sqrt();
-    Some(Amplitudes {
-        cos_t,
-        r_s: (cos_i - eta * cos_t) / (cos_i + eta * cos_t),
-        r_p: (eta * cos_i - cos_t) / (eta * cos_i + cos_t),
-    })
+    Some(Amplitudes::below_critical((), cos_i, eta, sin2_t))
 }
 
 /// Mirror reflection of `wi` about the unit normal `n`.

@@ -25,6 +25,8 @@ use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3};
 
+use super::real::Real;
+
 /// An isotropic GGX distribution with roughness `alpha`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ggx {
@@ -49,10 +51,7 @@ impl Ggx {
         if m.z <= 0.0 {
             return 0.0;
         }
-        let a2 = self.alpha * self.alpha;
-        let sin2 = m.x * m.x + m.y * m.y;
-        let denom = a2 * m.z * m.z + sin2;
-        a2 / (PI * denom * denom)
+        d_above((), self.alpha, m.x, m.y, m.z)
     }
 
     /// Smith's `Λ(w)`; infinite at grazing `w.z = 0`.
@@ -62,8 +61,7 @@ impl Ggx {
         if z2 == 0.0 {
             return f32::INFINITY;
         }
-        let a2t2 = self.alpha * self.alpha * (w.x * w.x + w.y * w.y) / z2;
-        a2t2 / (2.0 * (1.0 + (1.0 + a2t2).sqrt()))
+        lambda_off_horizon((), self.alpha, w.x, w.y, z2)
     }
 
     /// Smith masking `G1(w) = 1 / (1 + Λ(w))`.
@@ -104,6 +102,25 @@ impl Ggx {
         // Unstretch back to the ellipsoid configuration.
         Vec3::new(self.alpha * h.x, self.alpha * h.y, h.z.max(0.0)).try_normalize()
     }
+}
+
+/// [`Ggx::d`] of the normal `(x, y, z)` with `z > 0`, roughness `alpha`
+/// (on one value or on sixteen lanes, [`Real`]).
+#[inline(always)]
+pub(super) fn d_above<T: Real>(k: T::Token, alpha: T, x: T, y: T, z: T) -> T {
+    let a2 = alpha * alpha;
+    let sin2 = x * x + y * y;
+    let denom = a2 * z * z + sin2;
+    a2 / (T::constant(k, PI) * denom * denom)
+}
+
+/// [`Ggx::lambda`] of the direction `(x, y, z)` with `z2 = z² ≠ 0`,
+/// roughness `alpha` (on one value or on sixteen lanes, [`Real`]).
+#[inline(always)]
+pub(super) fn lambda_off_horizon<T: Real>(k: T::Token, alpha: T, x: T, y: T, z2: T) -> T {
+    let a2t2 = alpha * alpha * (x * x + y * y) / z2;
+    let one = T::constant(k, 1.0);
+    a2t2 / (T::constant(k, 2.0) * (one + (one + a2t2).sqrt()))
 }
 
 #[cfg(test)]

@@ -20,8 +20,11 @@ pub mod dielectric;
 pub mod diffuse;
 pub mod fresnel;
 pub mod microfacet;
+mod real;
 pub mod rough_conductor;
 pub mod texture;
+#[cfg(target_arch = "x86_64")]
+pub(crate) mod wide;
 
 #[cfg(test)]
 pub(crate) mod test_support;

@@ -38,7 +38,8 @@ pub struct RoughConductor {
 }
 
 impl RoughConductor {
-    fn ggx(&self) -> Ggx {
+    /// The microfacet distribution (α clamped into `[1e-4, 1]`).
+    pub(super) fn ggx(&self) -> Ggx {
         Ggx::new(self.alpha)
     }
 

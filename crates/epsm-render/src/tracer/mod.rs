@@ -10,6 +10,15 @@
 //! Random dimensions: the film position uses dimensions 0–1; bounce `k`
 //! (0-based) uses the block `2 + 8k …`: light selection, light position (2),
 //! lobe choice, direction (2), Russian roulette (the `DIM_*` offsets).
+//!
+//! Two bounce loops ([`Kernel`]): the scalar one (module `path`) traces one
+//! path at a time and records paths; the wide one (module `wide`, CPUs
+//! with AVX-512) traces sixteen paths at once, one per vector lane, with the
+//! same operations in every lane, so it renders the same image. Images
+//! ([`render`]) come from the wide loop where the CPU has it; records
+//! ([`render_recorded`], [`trace_samples`]) and ray logs ([`render_logged`])
+//! from the scalar one, which is also the reference the wide loop is tested
+//! against (`tests/wide.rs`: every shipped scene byte for byte).
 
 use std::time::Instant;
 
@@ -17,6 +26,8 @@ use glam::{UVec2, Vec2, Vec3};
 use rayon::prelude::*;
 
 mod path;
+#[cfg(target_arch = "x86_64")]
+mod wide;
 
 use path::{Recording, trace_path};
 
@@ -180,6 +191,31 @@ pub struct PixelSample {
     pub sample: u32,
 }
 
+/// Which bounce loop renders an image.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Kernel {
+    /// The wide tracer (sixteen paths per AVX-512 instruction) where the
+    /// CPU has AVX-512, else the scalar one: the same image either way
+    /// (module `wide`), the wide one faster.
+    #[default]
+    Fastest,
+    /// One path at a time, on every CPU (the reference the wide tracer is
+    /// tested against).
+    Scalar,
+}
+
+impl Kernel {
+    /// Whether [`Kernel::Fastest`] runs the wide tracer on this CPU.
+    pub fn wide_available() -> bool {
+        #[cfg(target_arch = "x86_64")]
+        {
+            crate::simd::Avx512::detect().is_some()
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        false
+    }
+}
+
 /// Renders the scene. `progress` is called (from worker threads) with the
 /// number of pixel samples each finished tile traced.
 pub fn render(
@@ -187,7 +223,25 @@ pub fn render(
     opts: &RenderOptions,
     progress: &(dyn Fn(u64) + Sync),
 ) -> RenderOutput {
-    render_tiles(scene, opts, None, false, progress).0
+    render_with(scene, opts, Kernel::Fastest, progress)
+}
+
+/// [`render`] with the bounce loop `kernel`.
+pub fn render_with(
+    scene: &Scene,
+    opts: &RenderOptions,
+    kernel: Kernel,
+    progress: &(dyn Fn(u64) + Sync),
+) -> RenderOutput {
+    render_tiles(
+        scene,
+        opts,
+        None,
+        kernel == Kernel::Fastest,
+        false,
+        progress,
+    )
+    .0
 }
 
 /// Renders the scene and logs every ray it casts ([`RayLog`]). The image is
@@ -198,7 +252,7 @@ pub fn render_logged(
     opts: &RenderOptions,
     progress: &(dyn Fn(u64) + Sync),
 ) -> (RenderOutput, RayLog) {
-    let (out, _, rays) = render_tiles(scene, opts, None, true, progress);
+    let (out, _, rays) = render_tiles(scene, opts, None, false, true, progress);
     (out, rays)
 }
 
@@ -211,7 +265,7 @@ pub fn render_recorded(
     level: RecordLevel,
     progress: &(dyn Fn(u64) + Sync),
 ) -> (RenderOutput, Vec<PathRecord>) {
-    let (out, records, _) = render_tiles(scene, opts, Some(level), false, progress);
+    let (out, records, _) = render_tiles(scene, opts, Some(level), false, false, progress);
     (out, records)
 }
 
@@ -246,21 +300,36 @@ pub fn trace_samples(
 }
 
 /// Renders the tiles in parallel: the image, with the records at `level`,
-/// and with `log` the rays cast.
+/// and with `log` the rays cast; with `wide`, by the wide tracer where the
+/// CPU has it (images only: no records, no ray log).
 fn render_tiles(
     scene: &Scene,
     opts: &RenderOptions,
     level: Option<RecordLevel>,
+    wide: bool,
     log: bool,
     progress: &(dyn Fn(u64) + Sync),
 ) -> (RenderOutput, Vec<PathRecord>, RayLog) {
     let start = Instant::now();
     let (w, h) = (scene.camera().width, scene.camera().height);
     let (tx, ty) = (w.div_ceil(TILE), h.div_ceil(TILE));
+    #[cfg(target_arch = "x86_64")]
+    let wide = (wide && level.is_none() && !log && opts.spp > 0)
+        .then(|| wide::WideTracer::new(scene))
+        .flatten();
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = wide;
     let mut tiles: Vec<TileOutput> = (0..tx * ty)
         .into_par_iter()
         .map(|t| {
-            let out = render_tile(scene, opts, level, log, UVec2::new(t % tx, t / tx));
+            let tile = UVec2::new(t % tx, t / tx);
+            #[cfg(target_arch = "x86_64")]
+            if let Some(wide) = &wide {
+                let out = wide.render_tile(scene, opts, tile);
+                progress(out.pixels.len() as u64 * opts.spp as u64);
+                return out;
+            }
+            let out = render_tile(scene, opts, level, log, tile);
             progress(out.pixels.len() as u64 * opts.spp as u64);
             out
         })

@@ -32,7 +32,7 @@
 #[cfg(target_arch = "x86_64")]
 mod avx;
 
-use glam::Vec4;
+use glam::{Vec3A, Vec4};
 
 use super::node::{Lanes8, TraceRay};
 use super::triangle::PackedTriangle;
@@ -54,6 +54,17 @@ pub(crate) struct TrianglePacket {
     /// Byte `i`: the caller's child bit of lane `i`'s triangle (the node's
     /// leaf child it belongs to; 0 in unused lanes).
     children: u64,
+}
+
+/// One lane of a [`TrianglePacket`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct PacketLane {
+    /// The vertices `[p0, p1, p2]`.
+    pub vertices: [Vec3A; 3],
+    /// The caller's id.
+    pub id: u32,
+    /// The caller's child bit.
+    pub child: u8,
 }
 
 /// The closest hit in a packet.
@@ -118,6 +129,18 @@ impl TrianglePacket {
         // copy j = 7 − i of bit 8i + 7 lands there, and the shifted copies
         // land on distinct bits, so nothing carries).
         (high.wrapping_mul(0x0002_0408_1020_4081) >> 56) as u32
+    }
+
+    /// The triangle in `lane` (`< LANES`; `None` for an unused lane).
+    pub fn lane(&self, lane: usize) -> Option<PacketLane> {
+        let child = self.children.to_le_bytes()[lane];
+        (child != 0).then(|| PacketLane {
+            vertices: self
+                .p
+                .map(|v| Vec3A::new(v[0].0[lane], v[1].0[lane], v[2].0[lane])),
+            id: self.ids[lane],
+            child,
+        })
     }
 
     /// The id of the triangle in `lane`.

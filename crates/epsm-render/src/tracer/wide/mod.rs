@@ -1,0 +1,217 @@
+//! The wide tracer: sixteen paths at once, one per AVX-512 lane, each lane
+//! doing what the scalar bounce loop (`tracer::path`) does for its path, in
+//! the same order and with the same operations, so the image is
+//! bit-identical to the scalar tracer's (ties between two primitives hit at
+//! exactly the same distance aside, whose winner depends on the walk's
+//! visiting order).
+//!
+//! Model: a tile's pixel samples form a queue (pixels in row-major order,
+//! each pixel's samples in order). A lane takes the next sample from the
+//! queue whenever it is free, so lanes stay busy while paths of different
+//! lengths end at different bounces; each step advances every lane's path
+//! by one bounce (`bounce`). A finished sample's radiance waits in a ring
+//! until every earlier sample of the tile has finished, then is added to its
+//! pixel's sum, so each pixel sums its samples in order, as the scalar tile
+//! loop does, whatever the order paths finish in.
+//!
+//! | constant | value | meaning |
+//! |---|---|---|
+//! | `RING` | 4096 | samples that may finish ahead of the oldest unfinished one; a lane waits while the ring is full |
+
+mod bounce;
+mod queue;
+
+use glam::{UVec2, Vec3};
+
+use super::{DIM_FIRST_BOUNCE, DIMS_PER_BOUNCE, RenderOptions, TILE, TileOutput};
+use crate::materials::wide::Materials16;
+use crate::ray::Rays16;
+use crate::sampler::STRATIFIED_DIMENSIONS;
+use crate::sampler::wide::Streams16;
+use crate::scene::Scene;
+use crate::simd::{Avx512, F32x16, LANES, Mask16, U32x16, Vec3x16};
+use bounce::{Paths16, bounce};
+use queue::Queue;
+
+/// Entries of the ring of finished samples (module docs).
+const RING: usize = 4096;
+
+// A path's first bounce block is its last stratified one (`Streams16`).
+const _: () = assert!(DIM_FIRST_BOUNCE + DIMS_PER_BOUNCE == STRATIFIED_DIMENSIONS);
+
+/// Per-object tables the lanes gather from by object index.
+#[derive(Clone, Debug)]
+pub(super) struct Objects16 {
+    /// Material index.
+    material: Vec<u32>,
+    /// 1 for emitters, 0 for other objects.
+    emitter: Vec<u32>,
+    /// Emitted radiance by channel (0 for other objects).
+    emission: [Vec<f32>; 3],
+}
+
+impl Objects16 {
+    fn new(scene: &Scene) -> Self {
+        let objects = scene.objects();
+        let channel = |c: usize| {
+            objects
+                .iter()
+                .map(|o| o.emission.map_or(0.0, |e| e[c]))
+                .collect()
+        };
+        Self {
+            material: objects.iter().map(|o| o.material).collect(),
+            emitter: objects
+                .iter()
+                .map(|o| u32::from(o.emission.is_some()))
+                .collect(),
+            emission: [channel(0), channel(1), channel(2)],
+        }
+    }
+}
+
+/// What every step of a tile reads.
+struct Setup<'a> {
+    scene: &'a Scene,
+    opts: &'a RenderOptions,
+    objects: &'a Objects16,
+    materials: &'a Materials16,
+}
+
+/// The wide tracer of one render: the CPU token and the scene's lane
+/// tables.
+pub(super) struct WideTracer {
+    k: Avx512,
+    objects: Objects16,
+    materials: Materials16,
+}
+
+impl WideTracer {
+    /// The tracer for `scene`, when the CPU has AVX-512.
+    pub fn new(scene: &Scene) -> Option<Self> {
+        Some(Self {
+            k: Avx512::detect()?,
+            objects: Objects16::new(scene),
+            materials: Materials16::new(scene.materials()),
+        })
+    }
+
+    /// Renders tile `tile` (in units of [`TILE`] pixels) with `opts.spp ≥ 1`
+    /// samples per pixel.
+    #[allow(unsafe_code)]
+    pub fn render_tile(&self, scene: &Scene, opts: &RenderOptions, tile: UVec2) -> TileOutput {
+        debug_assert!(opts.spp >= 1);
+        // SAFETY: `render_tile_avx512` requires only the CPU features it
+        // enables, and `self.k` (an `Avx512` token) exists only on a CPU
+        // found to have each of them.
+        unsafe { render_tile_avx512(self.k, scene, opts, self, tile) }
+    }
+}
+
+/// Renders one tile: the sample queue, the lanes and the ring (module
+/// docs), compiled for AVX-512 so that the lane types' operations are
+/// single instructions.
+#[target_feature(enable = "avx512f,avx512vl,avx512dq,avx512bw,avx2,bmi1,bmi2,lzcnt,popcnt")]
+fn render_tile_avx512(
+    k: Avx512,
+    scene: &Scene,
+    opts: &RenderOptions,
+    tracer: &WideTracer,
+    tile: UVec2,
+) -> TileOutput {
+    let (w, h) = (scene.camera().width, scene.camera().height);
+    let pixels: Vec<UVec2> = (tile.y * TILE..((tile.y + 1) * TILE).min(h))
+        .flat_map(|y| (tile.x * TILE..((tile.x + 1) * TILE).min(w)).map(move |x| UVec2::new(x, y)))
+        .collect();
+    let mut queue = Queue::new(&pixels, w, opts.seed, opts.spp, scene.camera().film_rays());
+    let setup = Setup {
+        scene,
+        opts,
+        objects: &tracer.objects,
+        materials: &tracer.materials,
+    };
+    let total = queue.total();
+    let mut out = TileOutput {
+        pixels: Vec::with_capacity(pixels.len()),
+        records: Vec::new(),
+        counters: Default::default(),
+        rays: Default::default(),
+    };
+    let mut ring = vec![Vec3::ZERO; RING];
+    let mut done = vec![false; RING];
+    let mut queued = [0u64; LANES];
+    let mut committed = 0u64;
+    // The pixel being summed, and how many of its samples are in `sum`.
+    let mut sum = Vec3::ZERO;
+    let mut summed = 0u32;
+    let zero3 = Vec3x16::splat(k, Vec3::ZERO);
+    let zero = F32x16::splat(k, 0.0);
+    let mut paths = Paths16 {
+        active: Mask16::NONE,
+        streams: Streams16::new(k),
+        ray: Rays16 {
+            origin: zero3,
+            dir: zero3,
+            t_min: zero,
+            t_max: zero,
+        },
+        beta: zero3,
+        radiance: zero3,
+        eta_scale: zero,
+        prev_p: zero3,
+        prev_pdf: zero,
+        has_prev: Mask16::NONE,
+        depth: U32x16::splat(k, 0),
+    };
+    loop {
+        // Free lanes take the next samples, as far as the ring has room.
+        let next_seq = queue.started();
+        let room = (total - next_seq).min(committed + RING as u64 - next_seq);
+        let fill = (!paths.active).first_of(room.min(LANES as u64) as u32);
+        if fill.any() {
+            queue.start(k, fill, &mut paths.streams, &mut paths.ray, &mut queued);
+            paths.beta = Vec3x16::select(fill, Vec3x16::splat(k, Vec3::ONE), paths.beta);
+            paths.radiance = Vec3x16::select(fill, zero3, paths.radiance);
+            paths.eta_scale = F32x16::select(fill, F32x16::splat(k, 1.0), paths.eta_scale);
+            paths.has_prev = paths.has_prev.and_not(fill);
+            paths.depth = U32x16::select(fill, U32x16::splat(k, 0), paths.depth);
+            paths.active = paths.active | fill;
+        }
+        if !paths.active.any() {
+            break;
+        }
+        let ended = bounce(k, &setup, &mut paths, &mut out.counters);
+        paths.active = paths.active.and_not(ended);
+        if !ended.any() {
+            continue;
+        }
+        let r = &paths.radiance;
+        let [x, y, z] = [r.x.to_array(), r.y.to_array(), r.z.to_array()];
+        for lane in ended.lanes() {
+            let l = Vec3::new(x[lane], y[lane], z[lane]);
+            let slot = (queued[lane] % RING as u64) as usize;
+            ring[slot] = if l.is_finite() {
+                l
+            } else {
+                out.counters.non_finite += 1;
+                Vec3::ZERO
+            };
+            done[slot] = true;
+        }
+        // Samples finished in queue order join their pixel's sum.
+        while committed < queue.started() && done[(committed % RING as u64) as usize] {
+            let slot = (committed % RING as u64) as usize;
+            done[slot] = false;
+            sum += ring[slot];
+            summed += 1;
+            if summed == opts.spp {
+                let pixel = pixels[out.pixels.len()];
+                out.pixels.push((pixel, sum / opts.spp as f32));
+                (sum, summed) = (Vec3::ZERO, 0);
+            }
+            committed += 1;
+        }
+    }
+    debug_assert_eq!(committed, total);
+    out
+}
