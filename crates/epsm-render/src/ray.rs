@@ -82,7 +82,7 @@ fn offset_component(pc: f32, nc: f32) -> f32 {
 }
 
 /// [`offset_origin`] on all three coordinates at once with SSE2 (part of
-/// x86-64), the same result as [`offset_component`] per coordinate for
+/// x86-64), the same result as `offset_component` (the portable version) per coordinate for
 /// `|ng| ≤ 1`: truncation to integers is exact there, and the sign bit
 /// stands for `pc < 0` (they differ only at `-0.0`, which takes the float
 /// step).

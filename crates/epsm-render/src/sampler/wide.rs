@@ -1,5 +1,5 @@
 //! The streams of sixteen paths at once, one per lane, for the wide tracer:
-//! a lane's numbers are those of [`PixelSampler::get_1d`] for its own pixel,
+//! a lane's numbers are those of [`PixelSampler::get_1d`](super::PixelSampler::get_1d) for its own pixel,
 //! sample and dimension, so they are bit-identical (tests compare them).
 //!
 //! A path's stratified numbers (the film position and the first bounce's
@@ -41,7 +41,7 @@ pub(crate) struct TileKeys {
 /// The first numbers of sixteen samples, one per lane.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Starts16 {
-    /// The per-sample keys ([`PixelSampler`]'s).
+    /// The per-sample keys ([`PixelSampler`](super::PixelSampler)'s).
     pub key: U64x16,
     /// The film position's numbers (dimensions 0 and 1).
     pub film: [F32x16; 2],
@@ -75,7 +75,7 @@ impl TileKeys {
 
     /// The first numbers of sample `sample` of pixel `pixel` (its index in
     /// the tile) in every lane of `m`: exactly what the scalar
-    /// [`PixelSampler`] of that sample draws (other lanes unspecified).
+    /// [`PixelSampler`](super::PixelSampler) of that sample draws (other lanes unspecified).
     /// Lanes of one pixel use its keys as they are; lanes of several pixels
     /// gather theirs.
     #[inline(always)]
@@ -182,7 +182,7 @@ impl Block16 {
 /// its sample's [`Starts16`].
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Streams16 {
-    /// Each lane's per-sample key ([`PixelSampler`](super::PixelSampler)'s).
+    /// Each lane's per-sample key ([`PixelSampler`](super::PixelSampler)(super::PixelSampler)'s).
     pub key: U64x16,
     /// Each lane's first bounce block.
     pub first: [F32x16; BLOCK],

@@ -29,7 +29,7 @@ pub(super) struct Closest16 {
     pub b2: F32x16,
     /// The caller's id of the triangle hit (meaningful in `found`).
     pub id: U32x16,
-    /// The half-packet of the triangle hit ([`Tree16::groups`]; `u32::MAX`
+    /// The half-packet of the triangle hit ([`Tree16::groups`](super::tree::Tree16::groups); `u32::MAX`
     /// before a hit).
     pub group: U32x16,
 }
@@ -64,7 +64,7 @@ impl Closest16 {
     }
 }
 
-/// [`Tree16::groups`] of a hit found by a scalar subtree walk: no
+/// [`Tree16::groups`](super::tree::Tree16::groups) of a hit found by a scalar subtree walk: no
 /// half-packet's, so an equal `t` from any later node wins over it, as in
 /// the scalar walk.
 const NO_GROUP: u32 = u32::MAX - 1;
