@@ -1,6 +1,7 @@
 //! A [`Block`]'s eight numbers with AVX2: the same integer hashes and `f32`
-//! operations as the scalar [`PixelSampler::get_1d`](super::PixelSampler::get_1d), eight dimensions per
-//! instruction, so the numbers are bit-identical (the sampler's tests
+//! operations as the scalar
+//! [`PixelSampler::get_1d`](super::PixelSampler::get_1d), eight dimensions
+//! per instruction, so the numbers are bit-identical (the sampler's tests
 //! compare the two).
 
 use std::arch::x86_64::{

@@ -1,6 +1,8 @@
 //! The streams of sixteen paths at once, one per lane, for the wide tracer:
-//! a lane's numbers are those of [`PixelSampler::get_1d`](super::PixelSampler::get_1d) for its own pixel,
-//! sample and dimension, so they are bit-identical (tests compare them).
+//! a lane's numbers are those of
+//! [`PixelSampler::get_1d`](super::PixelSampler::get_1d) for its own
+//! pixel, sample and dimension, so they are bit-identical (tests compare
+//! them).
 //!
 //! A path's stratified numbers (the film position and the first bounce's
 //! block) are drawn when it starts, sixteen starting samples at once

@@ -4,8 +4,9 @@
 //! JCGT 2013) with one triangle per lane: the vertices are stored per
 //! coordinate (structure of arrays), so the ray's axis permutation
 //! `(kx, ky, kz)` only picks which lanes to load. Every lane rounds exactly as
-//! `PackedTriangle::intersect` (the one-triangle reference, in test builds) does (the shear `v[kx] + (−Sx)·v[kz]` is the
-//! product `M·v` of its matrix without the exact zero terms; no fused
+//! the one-triangle reference `PackedTriangle::intersect` (test builds) does
+//! (the shear `v[kx] + (−Sx)·v[kz]` is the product `M·v` of its matrix
+//! without the exact zero terms; no fused
 //! multiply–add), so a lane hits exactly when the scalar test hits, with the
 //! same `t` and barycentrics; an edge function that rounds to zero is
 //! recomputed in `f64` for that lane, as there. Unused lanes hold NaN

@@ -29,8 +29,9 @@ pub(super) struct Closest16 {
     pub b2: F32x16,
     /// The caller's id of the triangle hit (meaningful in `found`).
     pub id: U32x16,
-    /// The half-packet of the triangle hit ([`Tree16::groups`](super::tree::Tree16::groups); `u32::MAX`
-    /// before a hit).
+    /// The half-packet of the triangle hit
+    /// ([`Tree16::groups`](super::tree::Tree16::groups); `u32::MAX` before a
+    /// hit).
     pub group: U32x16,
 }
 
