@@ -135,6 +135,11 @@ pub struct PathRecord {
     pub connections: Vec<ConnectionRecord>,
     /// Radiance of rays that left the scene (background), MIS-weighted.
     pub escaped: Vec3,
+    /// Unit world direction of the ray that left the scene and saw the
+    /// background (the last vertex's sampled `wo`, or the camera ray when
+    /// no surface was hit); zero when `escaped` is zero. The colour
+    /// derivatives evaluate the last vertex's BSDF along it.
+    pub escape_dir: Vec3,
     /// The sample's total radiance (what the image accumulates).
     pub radiance: Vec3,
     /// Set when the tracer dropped the sample; the record then holds only

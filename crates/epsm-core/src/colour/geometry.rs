@@ -26,9 +26,10 @@
 //! | `s²` (area) | a vertex or light point on an object of scale `s` | `2 ∂s/s` |
 //!
 //! Camera importance and emitted radiance (Lambertian emitters) are
-//! constant; for the escaped radiance the last non-delta vertex's own
-//! factor (its escape direction is not recorded) and the background are
-//! held fixed. Delta (specular) vertices: with the camera-ray convention the
+//! constant; the escaped radiance leaves the last vertex along its recorded
+//! world direction ([`PathRecord::escape_dir`]), so that vertex's factor
+//! changes with its motion while the background it sees is held fixed, as
+//! for a next-event connection to the background. Delta (specular) vertices: with the camera-ray convention the
 //! vertex after a mirror or glass interface stays on the scattered ray and
 //! the lobe's Fresnel weight changes with `cos θi` (`chain.rs`); with the
 //! attached convention their motion is the manifold's (carried by `dp/dθ`),
@@ -253,6 +254,15 @@ impl Geometric<'_> {
                     let (cn, dcn) = cos(next, &wo);
                     prefix += bsdf_rate(mat, &m[j], &wi, &wo)?
                         + Vec3::splat((dcn / cn - 2.0 * dr + nodes[j + 1].area_rate(k)) as f32);
+                }
+                // The escaped radiance leaves along its recorded world
+                // direction (the background at infinity stays put).
+                (None, None) if record.escaped != Vec3::ZERO => {
+                    let wo = Dir {
+                        w: record.escape_dir.as_dvec3(),
+                        dw: DVec3::ZERO,
+                    };
+                    prefix += bsdf_rate(mat, &m[j], &wi, &wo)?;
                 }
                 (None, _) => {}
             }

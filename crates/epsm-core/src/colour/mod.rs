@@ -186,9 +186,12 @@ impl ColourModel {
                 }
                 continue;
             }
-            let wo_next = v
-                .get(i + 1)
-                .map_or(Vec3::Z, |n| frame.to_local((n.p - x.p).normalize_or_zero()));
+            // Toward the next vertex, or where the path left the scene
+            // (zero, and no terms after, when it ended here).
+            let wo_next = frame.to_local(
+                v.get(i + 1)
+                    .map_or(record.escape_dir, |n| (n.p - x.p).normalize_or_zero()),
+            );
             for probe in probes {
                 let mut d = probe.ratio(wi, wo_next) * after[i];
                 for c in conns.clone() {

@@ -95,6 +95,20 @@ impl Target {
         };
         (domain, Cow::Borrowed(words))
     }
+
+    /// The lowest value the optimizer steps a parameter of this target to,
+    /// whatever its lower bound: `1e-3` for an albedo or an emission factor,
+    /// else none (`-∞`). Both scale every path term they touch, and their
+    /// colour derivative is the term times `∂ ln f/∂θ`: at exactly 0 the
+    /// channel carries no radiance, so its derivative vanishes and the
+    /// parameter could never leave 0. A step to the floor keeps the
+    /// derivative exact (and the error of a true value of 0 at `1e-3`).
+    pub fn step_floor(&self) -> f64 {
+        match self {
+            Target::Albedo { .. } | Target::Emission { .. } => 1e-3,
+            _ => f64::NEG_INFINITY,
+        }
+    }
 }
 
 /// The names a key can refer to.

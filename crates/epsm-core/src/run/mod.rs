@@ -143,7 +143,15 @@ impl Optimization {
         let o = &problem.optimizer;
         let adam = Adam::new(AdamSettings {
             lr: problem.params.iter().map(|p| p.lr).collect(),
-            bounds: problem.params.iter().map(|p| p.bounds).collect(),
+            bounds: problem
+                .params
+                .iter()
+                .zip(primal.table.params())
+                .map(|(p, t)| {
+                    let [lo, hi] = p.bounds;
+                    [lo.max(t.target.step_floor()).min(hi), hi]
+                })
+                .collect(),
             decay: o.decay,
             beta1: o.beta1,
             beta2: o.beta2,

@@ -2,7 +2,7 @@
 //! derivative tests: the test scene, vertex placement on the placed meshes
 //! (attached, on the camera ray, or on a mirror's or glass's scattered ray),
 //! and each term's product of factors (`Material::eval`, cosines, `1/r²`,
-//! area, delta weights).
+//! area, delta weights; the escaped radiance along its recorded direction).
 #![allow(dead_code)]
 
 use std::path::Path;
@@ -290,6 +290,9 @@ pub fn terms(scene: &Scene, r: &PathRecord, on_camera_ray: bool) -> Vec<Vec3> {
             let e = eval(scene, obj, p, n, x[j - 1].0, d.normalize());
             let next = v[j].at.object;
             prefix *= e * (nq.dot(d).abs() / d.length().powi(3) * area(scene, next)) as f32;
+        } else if r.escaped != Vec3::ZERO {
+            // The escaped ray keeps its world direction.
+            prefix *= eval(scene, obj, p, n, x[j - 1].0, r.escape_dir.as_dvec3());
         }
     }
     out.push(prefix);

@@ -77,6 +77,7 @@ pub(super) fn trace_path(
                 radiance += beta * le * w;
                 if let Some(r) = rec.as_deref_mut().filter(|r| !r.done) {
                     r.rec.escaped += beta * le * w;
+                    r.rec.escape_dir = dir;
                 }
             }
             break;

@@ -1,0 +1,394 @@
+//! The L2 gradient of colour parameters against central finite differences
+//! of the L2 loss itself, rendered at many samples per pixel.
+//!
+//! The analytic side is what an L2 iteration computes: recorded paths, the
+//! colour model with the pixel's vertex on its camera ray
+//! ([`PrimaryMotion::OnCameraRay`]), [`backprop`]. The finite difference
+//! re-renders the image at `θ ± h` with the same seeds (common random
+//! numbers), so the difference sees everything that changes: sampled
+//! directions moving with the roughness, Fresnel weights, emission, every
+//! bounce, and both next-event and BSDF-sampled light. Russian roulette is
+//! off (`rr_depth` above `max_depth`) so that no path's length depends on
+//! θ; each scene keeps its moving effects clear of silhouettes and shadow
+//! edges, where the L2 colour derivative (an interior term) does not look.
+//! The IOR's derivative holds refracted directions fixed (their motion is a
+//! position effect): the glass scene has one interface before a uniform
+//! emitter, so that nothing else changes with the IOR.
+//!
+//! | scene | parameters | paths |
+//! |---|---|---|
+//! | glossy | backdrop albedo, sphere GGX α, lamp emission | the backdrop directly and in a rough silver sphere, the lamp only in reflections, interreflection with the floor |
+//! | glass | block IOR | a glass block filling the view, an emitting wall inside it: the Fresnel weights of the refraction into the block and of the reflection off it |
+//! | mirror and glass | point light x and y | the floor directly, in a mirror and through a glass slab (vertices on the camera's scattered rays) |
+
+use std::path::Path;
+
+use epsm_core::ParamTable;
+use epsm_core::backprop::{PassInput, backprop, record_level};
+use epsm_core::colour::{ColourModel, PrimaryMotion};
+use epsm_core::loss::{LossEval, MatchGuards};
+use epsm_core::schedule::PathUse;
+use epsm_render::scene::load::parts_from_str;
+use epsm_render::tracer::{RenderOptions, render, render_recorded};
+use epsm_render::{Image, Scene};
+use glam::{DVec2, Vec3};
+
+/// Independent renders (seeds) averaged into one image.
+const CHUNKS: u32 = 16;
+
+const GLOSSY: &str = r#"
+[camera]
+origin = [0.0, 1.0, 3.2]
+target = [0.0, 0.7, 0.0]
+fov = 40.0
+resolution = [20, 20]
+
+[render]
+max_depth = 4
+rr_depth = 16
+
+[background]
+color = [0.05, 0.05, 0.06]
+
+[materials.backdrop]
+type = "diffuse"
+albedo = [0.6, 0.5, 0.4]
+
+[materials.floor]
+type = "diffuse"
+albedo = [0.5, 0.5, 0.5]
+
+[materials.silver]
+type = "rough_conductor"
+alpha = 0.3
+tint = [0.9, 0.9, 0.9]
+
+[materials.lamp]
+type = "diffuse"
+albedo = [0.0, 0.0, 0.0]
+
+[[objects]]
+name = "floor"
+shape = "rectangle"
+material = "floor"
+scale = 4.0
+rotate = [{ axis = [1, 0, 0], angle = -90 }]
+
+[[objects]]
+name = "backdrop"
+shape = "rectangle"
+material = "backdrop"
+scale = 4.0
+translate = [0.0, 2.0, -1.5]
+
+[[objects]]
+name = "sphere"
+shape = "sphere"
+exact = true
+material = "silver"
+scale = 0.6
+translate = [0.0, 0.6, 0.0]
+
+[[objects]]
+name = "lamp"
+shape = "rectangle"
+material = "lamp"
+emission = [8.0, 8.0, 8.0]
+scale = 0.5
+rotate = [{ axis = [1, 0, 0], angle = 90 }]
+translate = [0.8, 2.5, 1.5]
+"#;
+
+const GLASS: &str = r#"
+[camera]
+origin = [0.0, 0.0, 3.0]
+target = [0.0, 0.0, 0.0]
+fov = 30.0
+resolution = [20, 20]
+
+[render]
+max_depth = 8
+rr_depth = 16
+
+[background]
+color = [0.2, 0.2, 0.2]
+
+[materials.glass]
+type = "dielectric"
+ior = 1.5
+
+[materials.lamp]
+type = "diffuse"
+albedo = [0.0, 0.0, 0.0]
+
+[[objects]]
+name = "block"
+shape = "cube"
+material = "glass"
+scale = [4.0, 4.0, 1.0]
+rotate = [{ axis = [0, 1, 0], angle = 35 }]
+translate = [0.0, 0.0, -1.0]
+
+[[objects]]
+name = "wall"
+shape = "rectangle"
+material = "lamp"
+emission = [1.0, 0.8, 0.6]
+scale = 20.0
+translate = [0.0, 0.0, -1.2]
+"#;
+
+const MIRROR_GLASS: &str = r#"
+[camera]
+origin = [0.0, 1.2, 3.0]
+target = [0.0, 0.3, -0.5]
+fov = 45.0
+resolution = [20, 20]
+
+[render]
+max_depth = 6
+rr_depth = 16
+
+[background]
+color = [0.0, 0.0, 0.0]
+
+[materials.floor]
+type = "diffuse"
+albedo = [0.6, 0.6, 0.6]
+
+[materials.mirror]
+type = "conductor"
+tint = [0.9, 0.9, 0.9]
+
+[materials.glass]
+type = "dielectric"
+ior = 1.5
+
+[[objects]]
+name = "floor"
+shape = "rectangle"
+material = "floor"
+scale = 6.0
+rotate = [{ axis = [1, 0, 0], angle = -90 }]
+
+[[objects]]
+name = "mirror"
+shape = "rectangle"
+material = "mirror"
+scale = [0.9, 0.6, 1.0]
+rotate = [{ axis = [0, 1, 0], angle = -20 }]
+translate = [0.5, 0.55, -1.2]
+
+[[objects]]
+name = "slab"
+shape = "cube"
+material = "glass"
+scale = [0.5, 0.15, 0.05]
+rotate = [{ axis = [1, 0, 0], angle = 20 }]
+translate = [-0.2, 0.6, 2.0]
+
+[[lights]]
+name = "bulb"
+type = "point"
+position = [0.0, 1.0, 1.2]
+intensity = [3.0, 3.0, 3.0]
+"#;
+
+/// A scene, its parameters at their file values, and the target's offset.
+struct Case {
+    name: &'static str,
+    scene: &'static str,
+    keys: &'static [&'static str],
+    /// The target is rendered at the file values plus these.
+    offsets: &'static [f64],
+    /// Central-difference step of each parameter.
+    steps: &'static [f64],
+    spp: u32,
+}
+
+struct Setup {
+    scene: Scene,
+    table: ParamTable,
+    base: Vec<f64>,
+}
+
+impl Setup {
+    fn new(case: &Case) -> Self {
+        let file = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("{}.toml", case.name));
+        let parts = parts_from_str(case.scene, &file).expect("scene parses");
+        let scene = Scene::new(parts).expect("scene builds");
+        let mut table = ParamTable::new(&scene);
+        for key in case.keys {
+            table.add(key).expect("valid key");
+        }
+        let base = table.values();
+        Self { scene, table, base }
+    }
+
+    fn set(&mut self, theta: &[f64]) {
+        for (k, v) in theta.iter().enumerate() {
+            self.table.set_value(k, *v);
+        }
+        self.table.apply(&mut self.scene);
+    }
+
+    fn options(&self, spp: u32, chunk: u32) -> RenderOptions {
+        RenderOptions {
+            spp,
+            seed: 0x5eed + chunk,
+            ..RenderOptions::from_scene(&self.scene)
+        }
+    }
+
+    /// The mean of [`CHUNKS`] independent renders at `theta`.
+    fn image(&mut self, theta: &[f64], spp: u32) -> Image {
+        self.set(theta);
+        let mut sum: Option<Image> = None;
+        for chunk in 0..CHUNKS {
+            let img = render(&self.scene, &self.options(spp, chunk), &|_| {}).image;
+            match &mut sum {
+                None => sum = Some(img),
+                Some(s) => {
+                    assert_eq!(s.pixels.len(), img.pixels.len());
+                    for (a, b) in s.pixels.iter_mut().zip(&img.pixels) {
+                        *a += *b;
+                    }
+                }
+            }
+        }
+        let mut mean = sum.expect("at least one chunk");
+        let n = CHUNKS as f32;
+        mean.pixels.iter_mut().for_each(|c| *c /= n);
+        mean
+    }
+}
+
+/// `Σ_pixels |c − t|²` over the pixel count, in `f64`.
+fn l2(image: &Image, target: &Image) -> f64 {
+    assert_eq!(image.pixels.len(), target.pixels.len());
+    image
+        .pixels
+        .iter()
+        .zip(&target.pixels)
+        .map(|(c, t)| f64::from((*c - *t).length_squared()))
+        .sum::<f64>()
+        / image.pixels.len() as f64
+}
+
+/// The analytic L2 gradient at the file values and the central difference
+/// of the loss, per parameter; prints both and returns the relative errors.
+fn compare(case: &Case) -> Vec<f64> {
+    let mut s = Setup::new(case);
+    let base = s.base.clone();
+    let truth: Vec<f64> = base.iter().zip(case.offsets).map(|(b, o)| b + o).collect();
+    let target = s.image(&truth, 4 * case.spp);
+    let image = s.image(&base, case.spp);
+    let npix = image.pixels.len();
+    // ∂L/∂c per pixel of each chunk's image (the image is their mean).
+    let g_rgb: Vec<Vec3> = image
+        .pixels
+        .iter()
+        .zip(&target.pixels)
+        .map(|(c, t)| 2.0 * (*c - *t) / (npix as f32 * CHUNKS as f32))
+        .collect();
+    s.set(&base);
+    let loss = LossEval {
+        value: l2(&image, &target),
+        width: image.width,
+        height: image.height,
+        g_rgb,
+        g_xy: vec![DVec2::ZERO; npix],
+        matched: None,
+        guards: MatchGuards::default(),
+    };
+    let colour = ColourModel::new(&s.table, &s.scene, Some(PrimaryMotion::OnCameraRay));
+    let level = record_level(&s.table, &s.scene, &colour, PathUse::ColourOnly);
+    let mut analytic = vec![0.0; base.len()];
+    let (mut dropped, mut traced) = (0, 0);
+    for chunk in 0..CHUNKS {
+        let opts = s.options(case.spp, chunk);
+        let (_, records) = render_recorded(&s.scene, &opts, level, &|_| {});
+        let input = PassInput {
+            scene: &s.scene,
+            table: &s.table,
+            colour: &colour,
+            loss: &loss,
+            spp: case.spp,
+            use_: PathUse::ColourOnly,
+        };
+        let (g, stats) = backprop(&input, &records);
+        assert_eq!(g.len(), analytic.len());
+        analytic.iter_mut().zip(&g).for_each(|(a, b)| *a += b);
+        dropped += stats.dropped.total();
+        traced += stats.traced;
+    }
+    let mut errors = Vec::new();
+    for (k, key) in case.keys.iter().enumerate() {
+        let h = case.steps[k];
+        let mut at = |x: f64| {
+            let mut t = base.clone();
+            t[k] = x;
+            l2(&s.image(&t, case.spp), &target)
+        };
+        let fd = (at(base[k] + h) - at(base[k] - h)) / (2.0 * h);
+        let error = ((analytic[k] - fd) / fd).abs();
+        eprintln!(
+            "{}: {key}: analytic {:.6e}, central difference {fd:.6e}, relative error {error:.2e}",
+            case.name, analytic[k]
+        );
+        errors.push(error);
+    }
+    s.set(&base);
+    // Guards drop the few terms they cannot differentiate (a refraction
+    // within a hair of the critical angle), and count them.
+    eprintln!("{}: {dropped} of {traced} paths dropped", case.name);
+    assert!(
+        dropped * 1000 <= traced,
+        "{}: {dropped} of {traced} paths dropped",
+        case.name
+    );
+    errors
+}
+
+fn check(case: &Case) {
+    let errors = compare(case);
+    for (key, e) in case.keys.iter().zip(&errors) {
+        assert!(*e < 1e-2, "{}: {key}: relative error {e:.2e}", case.name);
+    }
+}
+
+#[test]
+fn albedo_roughness_and_emission_through_glossy_reflection() {
+    check(&Case {
+        name: "glossy",
+        scene: GLOSSY,
+        keys: &["backdrop.albedo.r", "sphere.alpha", "lamp.emission"],
+        offsets: &[-0.3, -0.15, 0.5],
+        steps: &[1e-2, 3e-2, 2e-1],
+        spp: 256,
+    });
+}
+
+#[test]
+fn ior_through_refraction_and_reflection() {
+    check(&Case {
+        name: "glass",
+        scene: GLASS,
+        keys: &["block.ior"],
+        offsets: &[0.3],
+        steps: &[2e-2],
+        spp: 64,
+    });
+}
+
+#[test]
+fn point_light_motion_seen_in_a_mirror_and_through_glass() {
+    check(&Case {
+        name: "mirror and glass",
+        scene: MIRROR_GLASS,
+        keys: &["bulb.translate.x", "bulb.translate.y"],
+        offsets: &[0.3, -0.2],
+        steps: &[1e-3, 1e-3],
+        spp: 64,
+    });
+}
