@@ -1,4 +1,4 @@
-//! Materials: a closed set of BSDFs dispatched by `match` (STYLE habit 3).
+//! Materials: a closed set of BSDFs dispatched by `match`.
 //!
 //! All functions work in the local shading frame (`+z` = shading normal) with
 //! the crate's `wi`/`wo` convention. `eval` includes `|cos θo|`.
