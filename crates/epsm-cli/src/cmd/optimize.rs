@@ -261,7 +261,7 @@ pub fn optimize(
         summary.curve.first().and_then(|c| c.param_error),
         summary.param_error,
     ) {
-        (Some(first), Some(last)) => format!(", parameter error {first:.3} → {last:.3}"),
+        (Some(first), Some(last)) => format!(", parameter error {first:.3} to {last:.3}"),
         _ => String::new(),
     };
     let figure = Figure {
