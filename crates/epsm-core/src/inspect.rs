@@ -1,4 +1,4 @@
-//! Inspection helpers shared by `epsm grad` and `epsm-viewer`: what one
+//! Inspection functions shared by `epsm grad` and `epsm-viewer`: what one
 //! gradient pass looks like per pixel, and the colour codes both draw it
 //! with. Nothing here feeds the optimization.
 //!

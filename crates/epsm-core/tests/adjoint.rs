@@ -79,6 +79,8 @@ fn adjoint_equals_forward(spheres: bool, seed: u64) {
                 .iter()
                 .map(|c| g.dot(*c).abs())
                 .fold(1e-12, f64::max);
+            assert_eq!(adj.entries.len(), fwd.params.len(), "{}", p.kind.name());
+            assert_eq!(fwd.params.len(), fwd.columns.len(), "{}", p.kind.name());
             for ((param, v), (fp, col)) in
                 adj.entries.iter().zip(fwd.params.iter().zip(&fwd.columns))
             {

@@ -1,4 +1,4 @@
-//! Closed forms (DESIGN §7): a point seen in a flat mirror moves as its
+//! Closed forms (docs/design.md §7): a point seen in a flat mirror moves as its
 //! reflection; a point seen through a parallel slab is offset by the known
 //! lateral shift and follows the slab's thickness by the 1-D refraction
 //! equation; a point light's shadow of a point occluder on a plane moves by
@@ -96,7 +96,9 @@ fn a_point_seen_in_a_flat_mirror_moves_as_its_reflection() {
     }
     let path = solved(&record, &scene, &table, PathKind::ChainToSurface);
     let expected = [DVec3::X, DVec3::Y, -DVec3::Z, 2.0 * DVec3::Z];
-    for (col, dx) in columns(&path, &table).into_iter().zip(expected) {
+    let cols = columns(&path, &table);
+    assert_eq!(cols.len(), expected.len(), "one column per parameter");
+    for (col, dx) in cols.into_iter().zip(expected) {
         assert_close(col, pixel_motion(&cam, image, dx), 1e-9);
     }
 }
@@ -235,7 +237,9 @@ fn a_point_lights_shadow_of_a_point_occluder_moves_by_similar_triangles() {
     let path = solved(&record, &scene, &table, PathKind::Shadow);
     let dz = ((o - l) * l.z / (l.z - o.z).powi(2)) * DVec3::new(1.0, 1.0, 0.0);
     let expected = [DVec3::X * t, DVec3::Y * t, dz, DVec3::X * (1.0 - t)];
-    for (col, ds) in columns(&path, &table).into_iter().zip(expected) {
+    let cols = columns(&path, &table);
+    assert_eq!(cols.len(), expected.len(), "one column per parameter");
+    for (col, ds) in cols.into_iter().zip(expected) {
         assert_close(col, pixel_motion(&cam, s, ds), 1e-9);
     }
 }

@@ -47,6 +47,14 @@ fn check(key: &str, h: f64, primary: PrimaryMotion) {
             continue;
         }
         let vals = term_values(r);
+        for (tp, tm) in &steps {
+            let lens = [t0[i].len(), tp[i].len(), tm[i].len()];
+            assert_eq!(
+                lens,
+                [vals.len(); 3],
+                "record {i}: terms at θ₀, θ₀ + h, θ₀ − h"
+            );
+        }
         let fd = |(tp, tm): &(Vec<Vec<Vec3>>, Vec<Vec<Vec3>>), h: f64| -> f64 {
             vals.iter()
                 .zip(&t0[i])

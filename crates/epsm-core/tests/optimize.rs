@@ -182,6 +182,7 @@ fn a_checkpoint_file_gives_back_every_value_bit_for_bit() {
         ("theta", &back.theta, &c.theta),
         ("adam.m", &back.adam.m, &c.adam.m),
     ] {
+        assert_eq!(read.len(), written.len(), "{name}: values read and written");
         let changed: Vec<(f64, f64)> = written
             .iter()
             .zip(read)

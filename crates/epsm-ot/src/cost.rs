@@ -1,6 +1,6 @@
 //! The ground cost `c(P, Q) = ‖P − Q‖²` and the loss and gradient built from it.
 //!
-//! All solvers share these helpers: a matching assigns each source point `P_i`
+//! All solvers share these functions: a matching assigns each source point `P_i`
 //! a target `T_i` (a matched point for the exact solver, a barycentre for the
 //! entropic one), the loss is `1/n Σ ‖P_i − T_i‖²`-like and the gradient with
 //! respect to `P_i` is `2 (P_i − T_i) / n`.

@@ -93,8 +93,8 @@ pub(crate) use dual::{Dual, converged, polish, solve_dual};
 /// reaches the default tolerance at blur 0.01 always, and below that only
 /// for enough points: n = 4096 uniform points at 3e-3 and not at 2e-3,
 /// n = 1024 not at 3e-3; the 4096-point blobs pair at 5e-3, not at 3e-3; two
-/// rendered 64×64 matches at 5e-3, one at 3e-3, neither at 1e-3 (session 17
-/// of `docs/performance.md`). Those solves are counted in
+/// rendered 64×64 matches at 5e-3, one at 3e-3, neither at 1e-3
+/// (`docs/performance.md`, "Sinkhorn"). Those solves are counted in
 /// `SolveStats::unconverged_solves`, and a stalled polish ends early
 /// (`SinkhornSettings::stall_margin`); a bound at the convergence limit would
 /// depend on the clouds (their number of points, their spread against the
@@ -143,7 +143,7 @@ pub struct SinkhornSettings {
     /// iteration; with no finite error by then, they stop too). At least 1;
     /// infinite: never stop early. The slowest converging solve measured (4795
     /// updates) would be stopped by a margin below 1.2 (`docs/performance.md`,
-    /// session 17).
+    /// "Sinkhorn").
     pub stall_margin: f64,
     /// Mixing β of the accelerated extra iterations, in `[1, 2)` (with no
     /// Anderson memory, the over-relaxation of plain Sinkhorn; 1 is plain Sinkhorn).

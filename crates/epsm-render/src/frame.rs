@@ -1,4 +1,4 @@
-//! Orthonormal shading frames and cosine helpers.
+//! Orthonormal shading frames and cosine functions.
 //!
 //! [`Frame::from_normal`] is the branchless construction of Duff et al.,
 //! "Building an Orthonormal Basis, Revisited" (JCGT 2017). Unlike

@@ -50,8 +50,8 @@ pub struct Hit {
 /// them ([`TexCoords::get`]): a triangle's are known when the point is made;
 /// an exact sphere's cost two inverse trigonometric functions, which
 /// materials without an image texture never pay (`scenes/cornell-box.toml`'s
-/// glass sphere reads none; docs/performance.md, session 19: 2.5–3 % in one
-/// pair of runs, inside the noise in another).
+/// glass sphere reads none; measured 2.5–3 % of its render time in one pair
+/// of runs, inside the noise in another).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum TexCoords {
     /// Known coordinates.

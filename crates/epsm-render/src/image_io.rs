@@ -275,6 +275,7 @@ mod tests {
         write_image(&path, &img).expect("write png");
         let back = read_image(&path).expect("read png");
         assert_eq!((back.width, back.height), (5, 3));
+        assert_eq!(img.pixels.len(), back.pixels.len());
         for (a, b) in img.pixels.iter().zip(&back.pixels) {
             for c in 0..3 {
                 let (ea, eb) = (linear_to_srgb(a[c]), linear_to_srgb(b[c]));

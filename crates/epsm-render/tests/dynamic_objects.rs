@@ -37,6 +37,7 @@ fn instanced_and_static_objects_render_the_same_image() {
         .to_vec();
     dynamic.set_dynamic(&ids);
     let (a, b) = (image(&all_static), image(&dynamic));
+    assert_eq!(a.len(), b.len(), "pixel counts");
     // Hits agree to rounding: almost every pixel is within 1e-3 relative.
     let close = a
         .iter()

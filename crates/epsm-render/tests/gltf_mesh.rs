@@ -81,6 +81,7 @@ fn assert_flattened(mesh: &Mesh) {
         Vec3::new(2., 0., 5.),
         Vec3::new(0., 0., 6.),
     ];
+    assert_eq!(mesh.positions.len(), expected.len());
     for (p, e) in mesh.positions.iter().zip(expected) {
         assert!(p.abs_diff_eq(e, 1e-6), "{p} != {e}");
     }

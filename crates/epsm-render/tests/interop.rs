@@ -182,6 +182,7 @@ fn image(parts: SceneParts, spp: u32) -> Image {
 /// where a ray grazes an edge that moved by an f32 rounding).
 fn assert_same(a: &Image, b: &Image, what: &str) {
     assert_eq!((a.width, a.height), (b.width, b.height), "{what}");
+    assert_eq!(a.pixels.len(), b.pixels.len(), "{what}: pixel counts");
     let (ma, mb) = (a.mean(), b.mean());
     assert!(ma.max_element() > 1e-3, "{what}: the image is black");
     assert!(

@@ -237,6 +237,7 @@ fn same_seed_gives_bit_identical_images_with_one_and_two_threads() {
     };
     let one = in_pool(1, || render(&s, &o, &|_| {}));
     let two = in_pool(2, || render(&s, &o, &|_| {}));
+    assert_eq!(one.image.pixels.len(), two.image.pixels.len());
     assert!(
         one.image
             .pixels

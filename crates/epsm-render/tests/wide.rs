@@ -40,6 +40,7 @@ fn shipped_scenes_render_the_same_images_wide_and_scalar() {
         let scalar = render_with(&s, &opts, Kernel::Scalar, &|_| {});
         let wide = render_with(&s, &opts, Kernel::Fastest, &|_| {});
         let (a, b) = (&scalar.image, &wide.image);
+        assert_eq!((a.width, a.height), (b.width, b.height), "{name}");
         let mut differ = 0;
         for y in 0..a.height {
             for x in 0..a.width {
@@ -67,6 +68,7 @@ fn assert_same_images(name: &str, scene: &Scene, spps: &[u32]) {
         };
         let scalar = render_with(scene, &opts, Kernel::Scalar, &|_| {});
         let wide = render_with(scene, &opts, Kernel::Fastest, &|_| {});
+        assert_eq!(scalar.image.pixels.len(), wide.image.pixels.len(), "{name}");
         let differ = scalar
             .image
             .pixels

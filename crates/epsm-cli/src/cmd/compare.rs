@@ -1,7 +1,8 @@
 //! `epsm compare`: run several methods on one problem with the same
 //! iteration count and seed (and, with `--time-budget`, the same cap on
 //! wall-clock seconds), and draw their error-versus-time curves in one
-//! plot (`compare.png`) with `compare.csv` beside it; each method's own run
+//! plot (`compare.png`, with the target, the initial render and each
+//! method's final render below) with `compare.csv` beside it; each method's own run
 //! folder (`<out>/<method>/`) holds its full report.
 
 use std::fmt::Write as _;
@@ -10,8 +11,8 @@ use std::path::PathBuf;
 use epsm_core::load_problem;
 use epsm_core::report::write_atomic;
 
-use super::optimize::{Summary, apply_overrides, optimize, panels};
-use super::plots::plot_panels;
+use super::optimize::{Summary, apply_overrides, optimize, panels, problem_name, start_images};
+use super::plots::{Figure, Thumb, plot_figure};
 
 /// Arguments of `epsm compare`.
 #[derive(clap::Args, Debug)]
@@ -49,12 +50,7 @@ pub fn run(args: &CompareArgs) -> anyhow::Result<()> {
         d.push("-compare");
         d.into()
     });
-    let name = args
-        .problem
-        .file_stem()
-        .and_then(|s| s.to_str())
-        .unwrap_or("problem")
-        .to_owned();
+    let name = problem_name(&args.problem);
     // Every method's problem first, so that a bad `--methods` entry fails
     // before any run. A method listed twice would run twice into one folder.
     for (i, m) in args.methods.iter().enumerate() {
@@ -110,7 +106,21 @@ pub fn run(args: &CompareArgs) -> anyhow::Result<()> {
     }
     write_atomic(&out.join("compare.csv"), csv.as_bytes())?;
     let refs: Vec<(String, &Summary)> = runs.iter().map(|(m, s)| (m.clone(), s)).collect();
-    plot_panels(&out.join("compare.png"), &panels(&refs))?;
+    let mut strip = runs
+        .first()
+        .map(|(_, s)| start_images(s))
+        .unwrap_or_default();
+    strip.extend(runs.iter().map(|(m, s)| Thumb {
+        label: format!("{m} final"),
+        image: s.last.clone(),
+    }));
+    let methods: Vec<&str> = runs.iter().map(|(m, _)| m.as_str()).collect();
+    let figure = Figure {
+        title: format!("{name}: {}", methods.join(" vs ")),
+        panels: &panels(&refs),
+        strip: &strip,
+    };
+    plot_figure(&out.join("compare.png"), &figure)?;
     if args.markdown {
         print!("{md}");
     } else {

@@ -3,7 +3,8 @@
 //! Output folder: `run.csv` (one row per iteration, rewritten atomically each
 //! iteration), `target`, `initial` and `final` images (`.png` sRGB and
 //! `.exr` linear), `report.png` (image RMSE and parameter error against
-//! wall-clock seconds), `checkpoint.json` every `output.checkpoint_every`
+//! wall-clock seconds, and the target, initial and final images, titled with
+//! the problem and the method), `checkpoint.json` every `output.checkpoint_every`
 //! iterations and at the end (`--resume DIR` continues from it).
 //!
 //! The first iteration whose entropic OT solves stopped above their marginal
@@ -17,9 +18,9 @@ use epsm_core::loss::LossKind;
 use epsm_core::report::{Timings, csv, mean_timings, param_error, write_atomic};
 use epsm_core::{Method, Optimization, Problem, load_problem};
 use epsm_render::Image;
-use epsm_render::image_io::write_image;
+use epsm_render::image_io::{read_image, write_image};
 
-use super::plots::{Panel, Series, plot_panels};
+use super::plots::{Figure, Panel, Series, Thumb, plot_figure};
 use crate::progress;
 
 /// Arguments of `epsm optimize`.
@@ -63,6 +64,13 @@ pub struct Summary {
     pub per_iteration: Timings,
     /// One point per iteration.
     pub curve: Vec<CurvePoint>,
+    /// The target image.
+    pub target: Image,
+    /// The render at the initial θ (absent when a resumed run's
+    /// `initial.exr` cannot be read).
+    pub initial: Option<Image>,
+    /// The render at the final θ.
+    pub last: Image,
 }
 
 /// One iteration's errors, for plots.
@@ -181,12 +189,20 @@ pub fn optimize(
         .transpose()?;
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let mut opt = Optimization::new(problem)?;
-    if let Some(c) = resumed {
+    let initial = if let Some(c) = resumed {
         opt.resume(&checkpoint, c)?;
+        let file = out.join("initial.exr");
+        read_image(&file)
+            .inspect_err(|e| {
+                eprintln!("warning: report.png shows no initial image: {e}");
+            })
+            .ok()
     } else {
         save(out, "target", opt.target())?;
-        save(out, "initial", &opt.render(preview_spp))?;
-    }
+        let image = opt.render(preview_spp);
+        save(out, "initial", &image)?;
+        Some(image)
+    };
     let keys = opt.keys();
     let total = u64::from(opt.problem().optimizer.iterations);
     let bar = progress::bar(total, "iterations");
@@ -231,13 +247,59 @@ pub fn optimize(
         wall_s: opt.checkpoint().wall_s,
         per_iteration: mean_timings(opt.rows()),
         curve,
+        target: opt.target().clone(),
+        initial,
+        last: final_image,
     };
     let method = opt.problem().optimizer.method.name();
-    plot_panels(
-        &out.join("report.png"),
-        &panels(&[(method.to_owned(), &summary)]),
-    )?;
+    let mut strip = start_images(&summary);
+    strip.push(Thumb {
+        label: "final".into(),
+        image: summary.last.clone(),
+    });
+    let errors = match (
+        summary.curve.first().and_then(|c| c.param_error),
+        summary.param_error,
+    ) {
+        (Some(first), Some(last)) => format!(", parameter error {first:.3} to {last:.3}"),
+        _ => String::new(),
+    };
+    let figure = Figure {
+        title: format!(
+            "{}: {method}, {} iterations in {:.1} s{errors}",
+            problem_name(problem_file),
+            summary.iterations,
+            summary.wall_s
+        ),
+        panels: &panels(&[(method.to_owned(), &summary)]),
+        strip: &strip,
+    };
+    plot_figure(&out.join("report.png"), &figure)?;
     Ok(summary)
+}
+
+/// The name of a problem in titles and tables: its file's stem.
+pub fn problem_name(file: &Path) -> String {
+    file.file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or("problem")
+        .to_owned()
+}
+
+/// The first images of a figure's strip: the target and, when known, the
+/// initial render.
+pub fn start_images(s: &Summary) -> Vec<Thumb> {
+    let mut strip = vec![Thumb {
+        label: "target".into(),
+        image: s.target.clone(),
+    }];
+    if let Some(image) = &s.initial {
+        strip.push(Thumb {
+            label: "initial".into(),
+            image: image.clone(),
+        });
+    }
+    strip
 }
 
 /// The two panels of a report: image RMSE and parameter error against time.

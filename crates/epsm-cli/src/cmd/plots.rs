@@ -1,18 +1,32 @@
-//! PNG plots (plotters, bitmap backend, text with the Ubuntu Light font
-//! shipped by `epaint_default_fonts`: no system fonts needed) and atomic
-//! 8-bit image writes.
+//! PNG figures of optimization runs (`report.png` of `epsm optimize`,
+//! `compare.png` of `epsm compare`) and atomic 8-bit image writes.
+//!
+//! A figure reads top to bottom: a title (the problem and the methods), one
+//! legend for every panel (outside the data), the panels side by side (an
+//! error against wall-clock seconds each, on a log axis labelled at
+//! `1…9 × 10^k`, `1, 2, 5 × 10^k` or `10^k` over its whole range, whichever
+//! keeps the labels few), then a strip of images (sRGB, each scaled to fit a
+//! 256-pixel square by nearest neighbour) with their names below them.
+//!
+//! Drawn with plotters' bitmap backend; text in the Ubuntu Light font shipped
+//! by `epaint_default_fonts`, so no system fonts are needed.
 
 use std::path::Path;
 
 use anyhow::Context;
+use epsm_render::Image;
+use epsm_render::image_io::linear_to_srgb;
+use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::FontStyle;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 /// One curve: a name for the legend and `(x, y)` points.
 pub struct Series {
-    /// Legend entry.
+    /// Legend entry (curves of the same name share a colour across panels).
     pub name: String,
-    /// Points in x order.
+    /// Points in x order; points with a non-finite or non-positive y are
+    /// left out (the y axis is logarithmic).
     pub points: Vec<(f64, f64)>,
 }
 
@@ -26,7 +40,35 @@ pub struct Panel {
     pub series: Vec<Series>,
 }
 
+/// One image of a figure's strip.
+pub struct Thumb {
+    /// Name written below the image.
+    pub label: String,
+    /// The image (linear RGB, shown sRGB-encoded and clamped).
+    pub image: Image,
+}
+
+/// A whole figure: title, panels and image strip.
+pub struct Figure<'a> {
+    /// Title at the top (the problem and the methods).
+    pub title: String,
+    /// Panels, side by side.
+    pub panels: &'a [Panel],
+    /// Images, left to right, below the panels (may be empty).
+    pub strip: &'a [Thumb],
+}
+
 const FONT: &str = "sans-serif";
+/// Size of one panel, pixels.
+const PANEL: (u32, u32) = (600, 440);
+/// Heights of the title and legend bands, pixels.
+const TITLE_H: u32 = 44;
+const LEGEND_H: u32 = 30;
+/// Side of the square an image of the strip is fitted into, its label's
+/// band below it and the gap around images, pixels.
+const THUMB: u32 = 256;
+const THUMB_LABEL_H: u32 = 28;
+const GAP: u32 = 12;
 
 fn register_font() {
     // Registering twice is harmless; a failure only loses text.
@@ -34,90 +76,316 @@ fn register_font() {
         plotters::style::register_font(FONT, FontStyle::Normal, epaint_default_fonts::UBUNTU_LIGHT);
 }
 
-/// Draws `panels` side by side against wall-clock seconds (log y) into a PNG.
-pub fn plot_panels(path: &Path, panels: &[Panel]) -> anyhow::Result<()> {
+/// Draws `figure` into a PNG at `path` (written atomically).
+pub fn plot_figure(path: &Path, figure: &Figure) -> anyhow::Result<()> {
     register_font();
-    let (w, h) = (560 * panels.len().max(1) as u32, 420u32);
+    let n_panels = figure.panels.len().max(1) as u32;
+    let strip_w = figure.strip.len() as u32 * (THUMB + GAP) + GAP;
+    let strip_h = if figure.strip.is_empty() {
+        0
+    } else {
+        THUMB + THUMB_LABEL_H + 2 * GAP
+    };
+    let w = (n_panels * PANEL.0).max(strip_w);
+    let h = TITLE_H + LEGEND_H + PANEL.1 + strip_h;
     let mut buf = vec![255u8; (w * h * 3) as usize];
+    let names = legend_names(figure.panels);
+    let placed = place_strip(figure.strip, w, TITLE_H + LEGEND_H + PANEL.1 + GAP);
     {
         let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
-        let areas = root.split_evenly((1, panels.len().max(1)));
-        for (panel, area) in panels.iter().zip(&areas) {
-            draw_panel(area, panel)
-                .map_err(|e| anyhow::anyhow!("plotting {}: {e}", panel.title))?;
+        let e = |e: DrawingAreaErrorKind<_>| anyhow::anyhow!("plotting {}: {e}", path.display());
+        let centre = Pos::new(HPos::Center, VPos::Center);
+        root.draw(&Text::new(
+            figure.title.clone(),
+            ((w / 2) as i32, (TITLE_H / 2) as i32),
+            (FONT, 24).into_font().color(&BLACK).pos(centre),
+        ))
+        .map_err(e)?;
+        draw_legend(&root, &names, w, TITLE_H).map_err(e)?;
+        let (_, rest) = root.split_vertically(TITLE_H + LEGEND_H);
+        let (panel_row, _) = rest.split_vertically(PANEL.1);
+        for (panel, area) in figure
+            .panels
+            .iter()
+            .zip(panel_row.split_evenly((1, n_panels as usize)))
+        {
+            draw_panel(&area, panel, &names).map_err(e)?;
         }
-        root.present()
-            .map_err(|e| anyhow::anyhow!("plotting: {e}"))?;
+        for (thumb, at) in figure.strip.iter().zip(&placed) {
+            let x = (at.x + at.w / 2) as i32;
+            let y = (at.y + at.h + THUMB_LABEL_H / 2) as i32;
+            root.draw(&Text::new(
+                thumb.label.clone(),
+                (x, y),
+                (FONT, 17).into_font().color(&BLACK).pos(centre),
+            ))
+            .map_err(e)?;
+        }
+        root.present().map_err(e)?;
+    }
+    for (thumb, at) in figure.strip.iter().zip(&placed) {
+        blit(&mut buf, w, &thumb.image, at);
     }
     write_png(path, w, h, &buf)
 }
 
+/// Every series name of the panels, once each, in order of appearance.
+fn legend_names(panels: &[Panel]) -> Vec<String> {
+    let mut names: Vec<String> = Vec::new();
+    for s in panels.iter().flat_map(|p| &p.series) {
+        if !names.contains(&s.name) {
+            names.push(s.name.clone());
+        }
+    }
+    names
+}
+
+/// Curve colours, distinct and dark enough to read on white (the
+/// "tableau" palette), repeated beyond ten curves.
+const PALETTE: [RGBColor; 10] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(127, 127, 127),
+    RGBColor(188, 189, 34),
+    RGBColor(23, 190, 207),
+];
+
+fn colour(names: &[String], name: &str) -> RGBAColor {
+    let i = names.iter().position(|n| n == name).unwrap_or(0);
+    PALETTE[i % PALETTE.len()].to_rgba()
+}
+
+/// The legend band below the title: a line and the name per series,
+/// centred.
+fn draw_legend<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    names: &[String],
+    w: u32,
+    top: u32,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    const ENTRY: i32 = 150;
+    let total = ENTRY * names.len() as i32;
+    let y = (top + LEGEND_H / 2) as i32;
+    let left = (w as i32 - total) / 2;
+    for (i, name) in names.iter().enumerate() {
+        let x = left + i as i32 * ENTRY;
+        let c = colour(names, name);
+        root.draw(&PathElement::new(
+            vec![(x, y), (x + 28, y)],
+            c.stroke_width(3),
+        ))?;
+        root.draw(&Text::new(
+            name.clone(),
+            (x + 36, y),
+            (FONT, 17)
+                .into_font()
+                .color(&BLACK)
+                .pos(Pos::new(HPos::Left, VPos::Center)),
+        ))?;
+    }
+    Ok(())
+}
+
 fn draw_panel<DB: DrawingBackend>(
-    area: &DrawingArea<DB, plotters::coord::Shift>,
+    area: &DrawingArea<DB, Shift>,
     panel: &Panel,
-) -> Result<(), String> {
-    let finite = panel
-        .series
-        .iter()
-        .flat_map(|s| &s.points)
-        .filter(|(x, y)| x.is_finite() && y.is_finite() && *y > 0.0);
-    let (mut x_hi, mut y_lo, mut y_hi) = (1e-3f64, f64::MAX, f64::MIN_POSITIVE);
-    for &(x, y) in finite {
-        x_hi = x_hi.max(x);
-        y_lo = y_lo.min(y);
-        y_hi = y_hi.max(y);
-    }
-    if y_lo > y_hi {
-        (y_lo, y_hi) = (1e-3, 1.0);
-    }
-    let e = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+    names: &[String],
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    let plotted = |s: &Series| -> Vec<(f64, f64)> {
+        s.points
+            .iter()
+            .copied()
+            .filter(|(x, y)| x.is_finite() && y.is_finite() && *y > 0.0)
+            .collect()
+    };
+    let curves: Vec<(&Series, Vec<(f64, f64)>)> =
+        panel.series.iter().map(|s| (s, plotted(s))).collect();
+    let all = curves.iter().flat_map(|(_, p)| p);
+    let x_hi = all.clone().map(|p| p.0).fold(1e-3, f64::max);
+    let y_lo = all.clone().map(|p| p.1).fold(f64::INFINITY, f64::min);
+    let y_hi = all.map(|p| p.1).fold(0.0, f64::max);
+    let axis = LogAxis::new(y_lo, y_hi);
+    let y_range = (axis.lo..axis.hi)
+        .log_scale()
+        .with_key_points(axis.labels.clone())
+        .with_light_points(axis.minor.clone());
     let mut chart = ChartBuilder::on(area)
         .caption(&panel.title, (FONT, 20))
-        .margin(12)
-        .x_label_area_size(36)
-        .y_label_area_size(64)
-        .build_cartesian_2d(0.0..x_hi * 1.02, (y_lo * 0.8..y_hi * 1.25).log_scale())
-        .map_err(e)?;
+        .margin(14)
+        .x_label_area_size(44)
+        .y_label_area_size(78)
+        .build_cartesian_2d(0.0..x_hi * 1.02, y_range)?;
     chart
         .configure_mesh()
         .x_desc("wall-clock seconds")
         .y_desc(&panel.y_label)
+        .x_labels(8)
+        .x_max_light_lines(2)
+        .x_label_formatter(&|v| {
+            format!("{v:.3}")
+                .trim_end_matches('0')
+                .trim_end_matches('.')
+                .to_owned()
+        })
         .y_label_formatter(&|v| tick(*v))
-        .label_style((FONT, 13))
-        .draw()
-        .map_err(e)?;
-    for (i, s) in panel.series.iter().enumerate() {
-        let colour = Palette99::pick(i).to_rgba();
-        let pts = s
-            .points
-            .iter()
-            .copied()
-            .filter(|(x, y)| x.is_finite() && y.is_finite() && *y > 0.0);
-        chart
-            .draw_series(LineSeries::new(pts, colour.stroke_width(2)))
-            .map_err(e)?
-            .label(s.name.clone())
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(2))
-            });
+        .label_style((FONT, 15))
+        .axis_desc_style((FONT, 16))
+        .light_line_style(BLACK.mix(0.06))
+        .bold_line_style(BLACK.mix(0.18))
+        .draw()?;
+    for (s, points) in curves {
+        let c = colour(names, &s.name);
+        chart.draw_series(LineSeries::new(points, c.stroke_width(2)))?;
     }
-    chart
-        .configure_series_labels()
-        .label_font((FONT, 14))
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .draw()
-        .map_err(e)?;
     Ok(())
 }
 
-/// A short tick label for a log axis.
+/// A logarithmic axis: its range widened by `MARGIN` each way and snapped
+/// outward to `m × 10^k` (m in 1…10), the labelled values and the minor grid
+/// values inside it.
+#[derive(Debug)]
+struct LogAxis {
+    lo: f64,
+    hi: f64,
+    labels: Vec<f64>,
+    minor: Vec<f64>,
+}
+
+/// Most labels on one axis.
+const MAX_LABELS: usize = 12;
+/// Factor by which the data's range is widened before snapping, so that no
+/// curve runs along the frame.
+const MARGIN: f64 = 1.08;
+
+impl LogAxis {
+    /// The axis for data in `[lo, hi]` (`0 < lo ≤ hi`; anything else, as
+    /// when there is no data, gives `[0.001, 1]`).
+    fn new(lo: f64, hi: f64) -> Self {
+        let (lo, hi) = if lo.is_finite() && hi.is_finite() && lo > 0.0 && lo <= hi {
+            (lo, hi)
+        } else {
+            (1e-3, 1.0)
+        };
+        let lo = snap_down(lo / MARGIN);
+        let mut hi = snap_up(hi * MARGIN);
+        if hi <= lo {
+            hi = snap_up(lo * 1.0001);
+        }
+        let all = values_between(lo, hi, &[1, 2, 3, 4, 5, 6, 7, 8, 9], 1);
+        let labels = [
+            (&[1u32, 2, 3, 4, 5, 6, 7, 8, 9][..], 1),
+            (&[1, 2, 5][..], 1),
+        ]
+        .iter()
+        .map(|(m, every)| values_between(lo, hi, m, *every))
+        .chain((1..).map(|every| values_between(lo, hi, &[1], every)))
+        .find(|v| v.len() <= MAX_LABELS)
+        .unwrap_or_default();
+        let minor = if all.len() <= 90 { all } else { Vec::new() };
+        Self {
+            lo,
+            hi,
+            labels,
+            minor,
+        }
+    }
+}
+
+/// The largest `m × 10^k ≤ v` with m in 1…9.
+fn snap_down(v: f64) -> f64 {
+    let p = 10f64.powf(v.log10().floor());
+    let m = (v / p * (1.0 + 1e-12)).floor().clamp(1.0, 10.0);
+    m * p
+}
+
+/// The smallest `m × 10^k ≥ v` with m in 1…10.
+fn snap_up(v: f64) -> f64 {
+    let p = 10f64.powf(v.log10().floor());
+    let m = (v / p * (1.0 - 1e-12)).ceil().clamp(1.0, 10.0);
+    m * p
+}
+
+/// `m × 10^k` for the mantissas `m` and every `every`-th decade `k`, within
+/// `[lo, hi]` (to rounding), ascending.
+fn values_between(lo: f64, hi: f64, mantissas: &[u32], every: i32) -> Vec<f64> {
+    let (k0, k1) = (lo.log10().floor() as i32, hi.log10().ceil() as i32);
+    let mut out = Vec::new();
+    for k in (k0..=k1).filter(|k| (k - k0).rem_euclid(every) == 0) {
+        for &m in mantissas {
+            let v = f64::from(m) * 10f64.powi(k);
+            if v >= lo * (1.0 - 1e-9) && v <= hi * (1.0 + 1e-9) {
+                out.push(v);
+            }
+        }
+    }
+    out
+}
+
+/// A short label for a value `m × 10^k`: plain decimals between 0.001 and
+/// 10⁴, else `me±k`.
 fn tick(v: f64) -> String {
-    if (1e-2..1e4).contains(&v.abs()) {
-        let s = format!("{v:.3}");
-        s.trim_end_matches('0').trim_end_matches('.').to_owned()
+    if (1e-3..1e4).contains(&v.abs()) {
+        let decimals = (-v.abs().log10() - 1e-9).ceil().max(0.0) as usize;
+        format!("{v:.decimals$}")
     } else {
         format!("{v:.0e}")
+    }
+}
+
+/// Where an image of the strip goes in the figure, pixels.
+struct Placed {
+    x: u32,
+    y: u32,
+    w: u32,
+    h: u32,
+}
+
+/// Places the strip's images left to right, centred in a figure of width
+/// `fig_w`, each fitted into a `THUMB` square at row `top`.
+fn place_strip(strip: &[Thumb], fig_w: u32, top: u32) -> Vec<Placed> {
+    let used = (strip.len() as u32 * (THUMB + GAP)).saturating_sub(GAP);
+    let left = fig_w.saturating_sub(used) / 2;
+    strip
+        .iter()
+        .enumerate()
+        .map(|(i, t)| {
+            let (iw, ih) = (t.image.width.max(1), t.image.height.max(1));
+            let scale = f64::from(THUMB) / f64::from(iw.max(ih));
+            let w = ((f64::from(iw) * scale).round() as u32).clamp(1, THUMB);
+            let h = ((f64::from(ih) * scale).round() as u32).clamp(1, THUMB);
+            Placed {
+                x: left + i as u32 * (THUMB + GAP) + (THUMB - w) / 2,
+                y: top + (THUMB - h),
+                w,
+                h,
+            }
+        })
+        .collect()
+}
+
+/// Copies `img`, sRGB-encoded and scaled by nearest neighbour, into the RGB8
+/// buffer `buf` of width `buf_w` at `at`.
+fn blit(buf: &mut [u8], buf_w: u32, img: &Image, at: &Placed) {
+    if img.width == 0 || img.height == 0 {
+        return;
+    }
+    for dy in 0..at.h {
+        let sy = (u64::from(dy) * u64::from(img.height) / u64::from(at.h)) as u32;
+        for dx in 0..at.w {
+            let sx = (u64::from(dx) * u64::from(img.width) / u64::from(at.w)) as u32;
+            let c = img.get(sx, sy);
+            let i = (((at.y + dy) * buf_w + at.x + dx) * 3) as usize;
+            if let Some(px) = buf.get_mut(i..i + 3) {
+                for (p, v) in px.iter_mut().zip([c.x, c.y, c.z]) {
+                    *p = (linear_to_srgb(v) * 255.0).round() as u8;
+                }
+            }
+        }
     }
 }
 
@@ -129,4 +397,129 @@ pub fn write_png(path: &Path, w: u32, h: u32, rgb: &[u8]) -> anyhow::Result<()> 
     Ok(epsm_render::image_io::write_png_bytes(
         path, w, h, rgb8, rgb,
     )?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn labels(lo: f64, hi: f64) -> Vec<String> {
+        LogAxis::new(lo, hi)
+            .labels
+            .iter()
+            .map(|v| tick(*v))
+            .collect()
+    }
+
+    #[test]
+    fn a_range_within_one_decade_is_labelled_throughout() {
+        // An image RMSE between 0.021 and 0.047: no power of ten inside.
+        assert_eq!(
+            labels(0.021, 0.047),
+            ["0.01", "0.02", "0.03", "0.04", "0.05", "0.06"]
+        );
+        // A parameter error from 0.5 down to 0.1.
+        assert_eq!(
+            labels(0.1, 0.5),
+            ["0.09", "0.1", "0.2", "0.3", "0.4", "0.5", "0.6"]
+        );
+    }
+
+    #[test]
+    fn the_axis_covers_the_data_and_its_ends_are_labelled() {
+        for (lo, hi) in [
+            (0.0072, 1.06),
+            (3.1e-5, 0.4),
+            (0.25, 0.26),
+            (2.0, 2.0),
+            (1e-9, 1e3),
+        ] {
+            let a = LogAxis::new(lo, hi);
+            assert!(a.lo <= lo && a.hi >= hi, "{a:?} misses [{lo}, {hi}]");
+            assert!(a.labels.len() >= 2, "{a:?}: fewer than two labels");
+            assert!(a.labels.len() <= MAX_LABELS, "{a:?}: too many labels");
+            // No decade of the data without a label at its ends' scale: the
+            // lowest label is within a factor 10 of the axis' start, the
+            // highest within a factor 10 of its end.
+            assert!(a.labels[0] < a.lo * 10.0 + 1e-300, "{a:?}");
+            assert!(a.labels[a.labels.len() - 1] > a.hi / 10.0, "{a:?}");
+        }
+    }
+
+    #[test]
+    fn wide_ranges_thin_their_labels_to_decades() {
+        assert_eq!(
+            labels(1e-6, 0.9),
+            ["1e-6", "1e-5", "1e-4", "0.001", "0.01", "0.1", "1"]
+        );
+        let every_other = labels(1e-20, 1.0);
+        assert!(every_other.len() <= MAX_LABELS, "{every_other:?}");
+    }
+
+    #[test]
+    fn no_data_gives_a_default_axis() {
+        let a = LogAxis::new(f64::INFINITY, 0.0);
+        assert!(a.lo <= 1e-3 && a.hi >= 1.0, "{a:?}");
+        assert!(a.labels.len() >= 2, "{a:?}");
+    }
+
+    #[test]
+    fn tick_labels_are_short() {
+        assert_eq!(tick(0.05), "0.05");
+        assert_eq!(tick(0.1), "0.1");
+        assert_eq!(tick(3.0 * 10f64.powi(-2)), "0.03");
+        assert_eq!(tick(20.0), "20");
+        assert_eq!(tick(2e-5), "2e-5");
+    }
+
+    #[test]
+    fn a_figure_with_a_strip_is_written() {
+        let path = std::env::temp_dir().join(format!("epsm-plots-{}.png", std::process::id()));
+        let series = |name: &str, k: f64| Series {
+            name: name.into(),
+            points: (0..20)
+                .map(|i| (f64::from(i), k / f64::from(i + 1)))
+                .collect(),
+        };
+        let panels = [Panel {
+            title: "image RMSE".into(),
+            y_label: "RMSE".into(),
+            series: vec![series("epsm", 0.3), series("l2", 0.5)],
+        }];
+        let mut img = Image::new(64, 32);
+        img.set(3, 4, glam::Vec3::ONE);
+        let strip = [
+            Thumb {
+                label: "target".into(),
+                image: img.clone(),
+            },
+            Thumb {
+                label: "final".into(),
+                image: img,
+            },
+        ];
+        let fig = Figure {
+            title: "test — epsm".into(),
+            panels: &panels,
+            strip: &strip,
+        };
+        plot_figure(&path, &fig).expect("plot");
+        let png = image::open(&path).expect("readable PNG").into_rgb8();
+        std::fs::remove_file(&path).expect("removing the test figure");
+        assert_eq!(png.width(), PANEL.0.max(2 * (THUMB + GAP) + GAP));
+        assert_eq!(
+            png.height(),
+            TITLE_H + LEGEND_H + PANEL.1 + THUMB + THUMB_LABEL_H + 2 * GAP
+        );
+        // The white pixel (3, 4) of the 64×32 target, scaled ×4, is white
+        // in the strip; its neighbours are black.
+        let placed = place_strip(&strip, png.width(), TITLE_H + LEGEND_H + PANEL.1 + GAP);
+        let at = &placed[0];
+        assert_eq!((at.w, at.h), (256, 128));
+        assert_eq!(
+            png.get_pixel(at.x + 3 * 4 + 1, at.y + 4 * 4 + 1).0,
+            [255, 255, 255]
+        );
+        assert_eq!(png.get_pixel(at.x + 1, at.y + 1).0, [0, 0, 0]);
+    }
 }

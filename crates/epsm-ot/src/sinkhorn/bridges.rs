@@ -451,6 +451,7 @@ mod tests {
         )
         .unwrap_or_else(|| panic!("singular"));
         let exact = [r / tiny, r / tiny + r];
+        assert_eq!(x.len(), exact.len(), "{x:?}");
         for (got, want) in x.iter().zip(exact) {
             assert!((got / want - 1.0).abs() < 1e-12, "{x:?} against {exact:?}");
         }

@@ -146,6 +146,7 @@ mod tests {
             "{expected} {}",
             r1.loss
         );
+        assert_eq!(r0.gradient.len(), r1.gradient.len());
         for (g0, g1) in r0.gradient.iter().zip(&r1.gradient) {
             for k in 0..DIM {
                 let expected = f64::from(g0[k]) + 2.0 * 1500.0 / 60.0;

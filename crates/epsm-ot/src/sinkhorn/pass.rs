@@ -448,6 +448,7 @@ mod tests {
             2 * part_pairs < whole_pairs,
             "cut {part_pairs} of {whole_pairs} pairs"
         );
+        assert_eq!(whole.len(), part.len());
         for (i, (a, b)) in whole.iter().zip(&part).enumerate() {
             assert!((a - b).abs() <= 1e-5 * eps, "point {i}: {a} vs {b}");
         }
@@ -457,6 +458,7 @@ mod tests {
         assert_eq!(part.pairs, part_pairs);
         let mass = |m: &[Vec<f64>]| m.iter().flatten().map(|v| v.exp()).sum::<f64>();
         assert!((mass(&whole.log_masses) - mass(&part.log_masses)).abs() <= 1e-6);
+        assert_eq!(whole.softmin.len(), part.softmin.len());
         for (a, b) in whole.softmin.iter().zip(&part.softmin) {
             assert!((a - b).abs() <= 1e-5 * eps, "{a} vs {b}");
         }

@@ -46,6 +46,7 @@ fn lsap_cost(source: &PointCloud, target: &PointCloud) -> f64 {
         .flat_map(|p| target.points().map(move |q| sq_dist_f64(&p, &q)))
         .collect();
     let (rows, cols) = lsap::solve(n, n, &cost, false).unwrap_or_else(|e| panic!("lsap: {e:?}"));
+    assert_eq!((rows.len(), cols.len()), (n, n), "lsap: one pair per row");
     rows.iter()
         .zip(&cols)
         .map(|(&i, &j)| cost[i * n + j])

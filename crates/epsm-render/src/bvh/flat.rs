@@ -43,7 +43,7 @@
 //! fell (by 18 % with the mask). Dropping the skip (every packet of a node
 //! with a leaf hit tested, an empty lane mask for those without one) made
 //! the closest-hit walks 11 % slower, timed alone on the rays of a render
-//! (55.2 against 49.8 ns per ray, session 14).
+//! (55.2 against 49.8 ns per ray).
 //!
 //! The inner children are pushed by one loop over the bits of those hit
 //! (its test is 1.07 M of the 6.85 M simulated mispredicts at spp 8) and

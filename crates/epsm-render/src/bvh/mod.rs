@@ -91,7 +91,7 @@ const NO_WORLD_INDEX: u32 = u32::MAX;
 /// Scenes with at most this many exact spheres test each of them directly
 /// (before or after the static BVH's walk) instead of walking them through
 /// the top level. Measured on the Cornell box with 1–8 spheres of radius
-/// 0.22 on its floor (docs/performance.md, session 19): listed, one sphere
+/// 0.22 on its floor (`epsm bench render`, 128 spp): listed, one sphere
 /// renders 6–8 % faster than through the top level, two the same, three
 /// and more slower (8 spheres 20–25 %).
 const MAX_LISTED_SPHERES: usize = 2;

@@ -57,9 +57,9 @@ pub(super) const TINY_DIR: f32 = 1e-18;
 /// An occlusion walk ([`FlatBvh::trace`](super::flat::FlatBvh) with `ANY`)
 /// computes the shear itself before each packet test, so occlusion rays are
 /// made [`TraceRay::without_shear`]: shadow rays rarely reach a packet (0.06
-/// packet tests per shadow ray on `scenes/caustic-box.toml`, session 11), and
-/// the shear's division and its store and indexed reload of the direction
-/// then cost every shadow ray for nothing (docs/performance.md, session 22).
+/// packet tests per shadow ray on `scenes/caustic-box.toml`), and the
+/// shear's division and its store and indexed reload of the direction would
+/// then cost every shadow ray for nothing.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct TraceRay {
     /// Origin.

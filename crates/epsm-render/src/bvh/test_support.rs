@@ -1,4 +1,4 @@
-//! Test helpers shared by the BVH tests (module `flat`'s and the wide
+//! Test functions shared by the BVH tests (module `flat`'s and the wide
 //! walks').
 
 use epsm_testkit::Rng;

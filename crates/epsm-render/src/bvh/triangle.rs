@@ -58,7 +58,7 @@ impl RayShear {
         // loads below need no bounds checks. Selecting `dz` by comparisons
         // and the axes from a packed constant instead (no store and reload
         // before the packet test's vertex loads) compiled to two branches:
-        // shadow rays took 17.3 against 14.1 ns (session 14).
+        // shadow rays took 17.3 against 14.1 ns, walks timed alone.
         let d = Vec4::from((dir, 0.0)).to_array();
         let dz = d[kz & 3];
         let [kx, ky] = AXES_ACROSS[2 * kz + usize::from(dz < 0.0)];

@@ -1,4 +1,4 @@
-//! Materials: a closed set of BSDFs dispatched by `match` (STYLE habit 3).
+//! Materials: a closed set of BSDFs dispatched by `match`.
 //!
 //! All functions work in the local shading frame (`+z` = shading normal) with
 //! the crate's `wi`/`wo` convention. `eval` includes `|cos θo|`.
@@ -67,7 +67,7 @@ pub struct Material {
     pub two_sided: bool,
 }
 
-/// What kind of manifold vertex a material makes (DESIGN §5.4).
+/// What kind of manifold vertex a material makes (docs/design.md §5.4).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum VertexKind {
     /// Ends a specular chain (Lambertian).

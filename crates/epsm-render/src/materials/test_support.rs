@@ -1,4 +1,4 @@
-//! Test helpers shared by the material and light tests: the shared
+//! Test functions shared by the material and light tests: the shared
 //! deterministic random stream (`epsm_testkit::Rng`), spherical binning and Pearson's χ² goodness-of-fit test with
 //! pbrt's pooling of low-expectation bins (pbrt-v3 `bsdfs_test`).
 
@@ -191,7 +191,7 @@ fn ln_gamma(x: f64) -> f64 {
 }
 
 #[test]
-fn chi2_helper_accepts_a_fair_die_and_rejects_a_loaded_one() {
+fn chi2_test_accepts_a_fair_die_and_rejects_a_loaded_one() {
     assert!((ln_gamma(5.0) - 24f64.ln()).abs() < 1e-10);
     // Q(1, x) = e^{-x}.
     assert!((gamma_q(1.0, 2.0) - (-2f64).exp()).abs() < 1e-10);

@@ -1,4 +1,4 @@
-//! The material test battery (STYLE habit 9): every non-delta material gets
+//! The material test battery: every non-delta material gets
 //! the same checks of `sample` against `eval` and `pdf`; delta materials get
 //! their energy and direction checks.
 

@@ -1,4 +1,4 @@
-//! Shared helpers of the BVH and hit tests: a deterministic generator,
+//! Shared functions of the BVH and hit tests: a deterministic generator,
 //! random triangle soups, a bumpy grid with normals and uvs, random transforms
 //! and random scenes.
 

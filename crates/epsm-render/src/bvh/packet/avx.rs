@@ -16,7 +16,7 @@
 //! The `t_max` comparisons come before the division, with the other range
 //! tests. Moving them after it (so that the first branch does not wait for
 //! the `t_max` of the previous hit) was no faster: 51.4 against 50.8 ns
-//! per closest-hit ray, the walks timed alone (session 14).
+//! per closest-hit ray, the walks timed alone.
 //!
 //! No parameters.
 
@@ -180,7 +180,7 @@ impl TrianglePacket {
     /// instructions in the spp-8 run of `scenes/caustic-box.toml` than this
     /// call (1 707.4 M); forcing it inline through a plain
     /// `#[inline(always)]` function gave 1 745.8 M. Timed with the walks
-    /// alone (session 14, the rays of a render of that scene): called
+    /// alone (the rays of a render of that scene): called
     /// without this wrapper (LLVM's choice of where to inline it) 49.9
     /// against 49.6 ns per closest-hit ray; forced inline 51.2 ns, and
     /// shadow rays 14.6 against 13.6 ns.
