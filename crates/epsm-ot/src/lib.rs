@@ -62,6 +62,7 @@ pub mod points;
 pub mod sinkhorn;
 pub mod sliced;
 pub mod synthetic;
+pub mod warm;
 
 #[cfg(test)]
 mod tests;
@@ -72,6 +73,7 @@ pub use plan::{EntropicPlan, Matching, OtResult, PhaseTimes, SlicedPlan, SolveSt
 pub use points::{DIM, Point, PointCloud};
 pub use sinkhorn::{MAX_SPREAD, MIN_BLUR, SinkhornSettings};
 pub use sliced::SlicedSettings;
+pub use warm::MatchState;
 
 /// Which solver to use, with its settings: one interface for all of them.
 #[derive(Debug, Clone, PartialEq)]

@@ -39,6 +39,8 @@
 use std::collections::BTreeMap;
 use std::time::Instant;
 
+mod sequence;
+
 use anyhow::{Context, bail};
 use epsm_ot::{Matcher, Matching, SinkhornSettings, synthetic};
 use serde::Serialize;
@@ -75,6 +77,9 @@ pub struct OtBenchArgs {
     /// Sinkhorn ratio between successive blurs of the ε-scaling schedule.
     #[arg(long, default_value_t = 0.9)]
     pub scaling: f64,
+    /// Cold against warm-started matching along a rendered sequence (see `bench_ot::sequence`).
+    #[command(flatten)]
+    pub sequence: sequence::SequenceArgs,
 }
 
 /// One benchmark measurement, as printed with `--json`.
@@ -107,8 +112,6 @@ pub fn run(args: &OtBenchArgs) -> anyhow::Result<()> {
     if !(1..=MAX_POINTS).contains(&args.n) {
         bail!("--n must be in [1, {MAX_POINTS}], got {}", args.n);
     }
-    let (source, target) =
-        synthetic::blobs_pair(args.n, args.seed).context("generating the blobs pair")?;
     let matcher = match args.solver {
         OtSolver::Exact => Matcher::exact(),
         OtSolver::Sinkhorn => Matcher::Sinkhorn(SinkhornSettings {
@@ -118,6 +121,11 @@ pub fn run(args: &OtBenchArgs) -> anyhow::Result<()> {
         }),
         OtSolver::Sliced => Matcher::sliced(),
     };
+    if let Some(steps) = args.sequence.sequence {
+        return sequence::run(&args.sequence, steps, args.n, &matcher, args.json);
+    }
+    let (source, target) =
+        synthetic::blobs_pair(args.n, args.seed).context("generating the blobs pair")?;
     let start = Instant::now();
     let result = matcher
         .solve(&source, &target)
