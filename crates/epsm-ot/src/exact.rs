@@ -47,6 +47,7 @@
 //! | `exact.tolerance`      | reduced cost counted as a violation below −tolerance | 1e-11 |
 //! | `exact.auction_start`  | first ε of the auction, × diameter²        | 0.025   |
 //! | `exact.auction_end`    | last ε of the auction, × diameter²         | 2.5e-10 |
+//! | `exact.warm_auction_start` | first ε of a warm-started solve's auctions, × diameter² | 1e-4 |
 //! | `exact.warm_start`     | Sinkhorn settings of the warm start        | blur 0.03, one update per scale, ≤ 10 polish updates |
 
 mod auction;
@@ -104,6 +105,9 @@ pub struct ExactSettings {
     pub auction_start: f64,
     /// Last ε of the auction, before the exact finish, in units of the clouds' squared diameter.
     pub auction_end: f64,
+    /// First ε of the auctions of a warm-started solve (`crate::warm`), whose
+    /// prices start near the optimum, in units of the clouds' squared diameter.
+    pub warm_auction_start: f64,
 }
 
 impl Default for ExactSettings {
@@ -126,6 +130,7 @@ impl Default for ExactSettings {
             // benchmark's blobs pairs: 4.4).
             auction_start: 0.025,
             auction_end: 2.5e-10,
+            warm_auction_start: 1e-4,
         }
     }
 }
@@ -163,6 +168,13 @@ impl ExactSettings {
                 key: "exact.auction_start",
                 value: self.auction_start,
                 reason: "need auction_start >= auction_end > 0",
+            });
+        }
+        if !(self.warm_auction_start >= self.auction_end && self.warm_auction_start.is_finite()) {
+            return Err(OtError::InvalidSetting {
+                key: "exact.warm_auction_start",
+                value: self.warm_auction_start,
+                reason: "need warm_auction_start >= auction_end > 0",
             });
         }
         self.warm_start.validate()
@@ -211,13 +223,33 @@ pub(crate) fn solve_from(
     });
     let mut solved = match &previous {
         Some(p) => {
-            let start = phases.time("warm_graph", || p.start(&x, &y));
+            // Kept graph and potentials, completed by a check; then the auction
+            // from the kept prices at a small ε, and the same finish as a cold solve.
+            let per_row = VIOLATORS_PER_CANDIDATE * settings.candidates;
+            let warm = phases.time("warm_graph", || {
+                p.start(&x, &y, settings.tolerance, per_row)
+            });
             let mut stats = SolveStats {
                 warm_starts: 1,
+                pair_evaluations: warm.pairs,
+                added_pairs: warm.added,
                 ..SolveStats::default()
             };
-            stats.pair_evaluations += start.pairs;
-            finish(&x, &y, diam2, settings, start.assignment, stats)
+            let (edges, v) = warm.assignment.into_parts();
+            let (v, finished) = phases.time("auction", || {
+                auction_potentials(&edges, v, diam2, settings.warm_auction_start, settings)
+            });
+            stats.auction_budget_stops += usize::from(!finished);
+            let lsap = SparseAssignment::new(edges, v);
+            finish(
+                &x,
+                &y,
+                diam2,
+                settings,
+                lsap,
+                stats,
+                settings.warm_auction_start,
+            )
         }
         None => solve_sorted(&x, &y, diam2, settings),
     };
@@ -357,7 +389,7 @@ fn sparse_prices(
     phases.add("candidates", candidates_start.elapsed().as_secs_f64());
     // Price discovery by auction, then an exact shortest-augmenting-path finish.
     let (v, finished) = phases.time("auction", || {
-        auction_potentials(&edges, g, diameter_sq, settings)
+        auction_potentials(&edges, g, diameter_sq, settings.auction_start, settings)
     });
     stats.auction_budget_stops += usize::from(!finished);
     stats.phases = phases;
@@ -379,6 +411,7 @@ pub(crate) fn solve_sorted(
         settings,
         SparseAssignment::new(edges, v),
         stats,
+        settings.auction_start,
     )
 }
 
@@ -386,7 +419,9 @@ pub(crate) fn solve_sorted(
 /// paths, then optimality checks adding violated pairs, until the check finds none.
 ///
 /// Any start gives the optimal matching: the loop ends only on a check of all
-/// pairs against the final potentials. `stats` carries the work done before.
+/// pairs against the final potentials (rows whose potential did not rise
+/// since an earlier check cannot have gained a violation). `stats` carries
+/// the work done before; re-pricing auctions start at `auction_start` (× diameter²).
 fn finish(
     x: &Clustered,
     y: &Clustered,
@@ -394,6 +429,7 @@ fn finish(
     settings: &ExactSettings,
     mut lsap: SparseAssignment,
     mut stats: SolveStats,
+    auction_start: f64,
 ) -> SortedAssignment {
     let n = x.cloud.len();
     let k = settings.candidates;
@@ -409,7 +445,7 @@ fn finish(
             // the rows its greedy start leaves free are each a short search.)
             let (edges, v) = lsap.into_parts();
             let (v, finished) = phases.time("auction", || {
-                auction_potentials(&edges, v, diameter_sq, settings)
+                auction_potentials(&edges, v, diameter_sq, auction_start, settings)
             });
             stats.auction_budget_stops += usize::from(!finished);
             lsap = SparseAssignment::new(edges, v);
@@ -471,7 +507,7 @@ fn finish(
 /// Column potentials from an ε-scaling auction on `edges` started at prices `−v`,
 /// and whether the auction finished.
 ///
-/// Its ε runs from `auction_start` to `auction_end` times `diameter_sq` (1 for
+/// Its ε runs from `auction_start` to `settings.auction_end` times `diameter_sq` (1 for
 /// clouds of one point repeated, whose costs are all 0).
 ///
 /// If a phase runs out of bids the prices reached so far are returned: they
@@ -482,6 +518,7 @@ fn auction_potentials(
     edges: &[Vec<(u32, f64)>],
     v: Vec<f64>,
     diameter_sq: f64,
+    auction_start: f64,
     settings: &ExactSettings,
 ) -> (Vec<f64>, bool) {
     let unit = if diameter_sq > 0.0 { diameter_sq } else { 1.0 };
@@ -489,7 +526,7 @@ fn auction_potentials(
     let finished = auction::run(
         edges,
         &mut q,
-        settings.auction_start * unit,
+        auction_start * unit,
         settings.auction_end * unit,
         0.2,
     );

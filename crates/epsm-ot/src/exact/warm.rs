@@ -16,6 +16,7 @@
 use rayon::prelude::*;
 
 use super::SortedAssignment;
+use super::check::violations;
 use super::sparse::SparseAssignment;
 use crate::blocks::Clustered;
 use crate::cost::sq_dist_f64;
@@ -37,10 +38,12 @@ pub(crate) struct ExactState {
     targets: Vec<u32>,
 }
 
-/// The start of a warm solve: the sparse assignment and the cost evaluations it took.
+/// The start of a warm solve: the sparse assignment, the cost evaluations it took
+/// and the violated pairs its check added.
 pub(crate) struct WarmGraph {
     pub assignment: SparseAssignment,
     pub pairs: u64,
+    pub added: usize,
 }
 
 impl ExactState {
@@ -109,8 +112,10 @@ impl ExactState {
         same.then(|| y.clone())
     }
 
-    /// The sparse assignment the next solve starts from, on the clusterings `x` and `y`.
-    pub fn start(&self, x: &Clustered, y: &Clustered) -> WarmGraph {
+    /// The sparse assignment the next solve starts from, on the clusterings `x` and `y`:
+    /// the kept graph, with each row's `per_row` most violated pairs against
+    /// the kept `v` added (so its `u_i` is the row minimum over all pairs).
+    pub fn start(&self, x: &Clustered, y: &Clustered, tolerance: f64, per_row: usize) -> WarmGraph {
         let n = x.cloud.len();
         let mut sorted_target = vec![0u32; n];
         for (k, &j) in y.order.iter().enumerate() {
@@ -137,10 +142,23 @@ impl ExactState {
                 row
             })
             .collect();
-        let pairs = edges.iter().map(|r| r.len() as u64).sum();
+        let pairs: u64 = edges.iter().map(|r| r.len() as u64).sum();
+        let mut assignment = SparseAssignment::new(edges, v);
+        let rows = assignment.take_raised();
+        let (found, checked) = violations(
+            x,
+            y,
+            &assignment.u,
+            &assignment.v,
+            tolerance,
+            per_row,
+            &rows,
+        );
+        assignment.add_edges(&found);
         WarmGraph {
-            assignment: SparseAssignment::new(edges, v),
-            pairs,
+            assignment,
+            pairs: pairs + checked,
+            added: found.len(),
         }
     }
 }
