@@ -339,7 +339,8 @@ impl SinkhornState {
     }
 }
 
-/// Solves one entropic problem, by the polish alone when `start` gives potentials (clustered orders).
+/// Solves one entropic problem, by the polish alone when `start` gives potentials
+/// (clustered orders) and that polish converges, else from scratch.
 fn solve_one(
     x: &Clustered,
     y: &Clustered,
@@ -347,21 +348,22 @@ fn solve_one(
     settings: &SinkhornSettings,
     start: Option<Potentials>,
 ) -> Result<Solved, OtError> {
-    let warm = start.is_some();
-    let mut dual = if let Some(Potentials { f, g }) = start {
-        polish(x, y, f, g, settings, 0, 0)
-    } else if settings.exact_prices {
-        // Start the final-ε iterations from the optimal assignment's dual potentials.
-        let ex = crate::exact::solve_sorted(x, y, diam2, &crate::ExactSettings::default());
-        let guards = Guards::of_exact(&ex.stats);
-        let mut phases = ex.stats.phases;
-        let mut dual = polish(x, y, ex.u, ex.v, settings, ex.stats.pair_evaluations, 0);
-        dual.guards = guards;
-        phases.merge(&dual.phases);
-        dual.phases = phases;
-        dual
-    } else {
-        solve_dual(x, y, diam2, settings)
+    let kept = start.map(|Potentials { f, g }| polish(x, y, f, g, settings, 0, 0));
+    // A polish from kept potentials that did not converge (a stall, or out of
+    // updates) is replaced by the cold solve, its work still counted.
+    let (warm, mut dual) = match kept {
+        Some(d) if converged(d.marginal_error, settings.marginal_tolerance) => (true, d),
+        kept => {
+            let mut dual = cold_dual(x, y, diam2, settings);
+            if let Some(k) = kept {
+                dual.pairs += k.pairs;
+                dual.iterations += k.iterations;
+                let mut phases = k.phases;
+                phases.merge(&dual.phases);
+                dual.phases = phases;
+            }
+            (false, dual)
+        }
     };
     if !dual.marginal_error.is_finite() {
         // Not a plan at all: no barycentres from it (`rounding` says why, see the error).
@@ -389,6 +391,24 @@ fn solve_one(
         pairs,
         warm,
     })
+}
+
+/// The dual potentials of one entropic problem solved from scratch: the
+/// ε-scaling loop, or with `exact_prices` the polish from the exact duals.
+fn cold_dual(x: &Clustered, y: &Clustered, diam2: f64, settings: &SinkhornSettings) -> Dual {
+    if settings.exact_prices {
+        // Start the final-ε iterations from the optimal assignment's dual potentials.
+        let ex = crate::exact::solve_sorted(x, y, diam2, &crate::ExactSettings::default());
+        let guards = Guards::of_exact(&ex.stats);
+        let mut phases = ex.stats.phases;
+        let mut dual = polish(x, y, ex.u, ex.v, settings, ex.stats.pair_evaluations, 0);
+        dual.guards = guards;
+        phases.merge(&dual.phases);
+        dual.phases = phases;
+        dual
+    } else {
+        solve_dual(x, y, diam2, settings)
+    }
 }
 
 /// The spread check of an entropic solve: [`OtError::SpreadTooLarge`] when the

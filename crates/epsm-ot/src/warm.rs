@@ -17,7 +17,12 @@
 //!   self-transport problems). The next solve runs only the polish at the
 //!   final ε from them, to the same marginal tolerance: the same fixed point,
 //!   reached from another start, so loss and gradient agree with the cold
-//!   solve's to within that tolerance, not bit for bit.
+//!   solve's to within that tolerance, not bit for bit. A polish that stalls
+//!   or runs out of updates is replaced by the cold solve. On rendered
+//!   sequences with fresh Monte Carlo noise per image the polish from kept
+//!   potentials took about as long as the cold solve (`epsm bench ot
+//!   --sequence`): the coarse corrections of the cold loop remove the
+//!   large-scale error a changed source leaves, the polish does not.
 //! - **sliced**: nothing is kept.
 //!
 //! A state from another matcher or other settings, or from clouds of another
@@ -78,6 +83,15 @@ impl MatchState {
     /// Whether nothing is kept.
     pub fn is_empty(&self) -> bool {
         self.kept.is_none()
+    }
+
+    /// The kept target potentials of an exact solve (target order).
+    #[cfg(test)]
+    pub(crate) fn exact_potentials(&self) -> Option<&[f64]> {
+        match &self.kept.as_ref()?.solver {
+            SolverState::Exact(e) => Some(e.target_potentials()),
+            SolverState::Sinkhorn(_) => None,
+        }
     }
 }
 

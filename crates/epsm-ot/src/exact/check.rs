@@ -217,4 +217,38 @@ mod tests {
         screened_block(&p, -1.0, &cols, &vec![0.0; n], 0..n, &mut slack);
         assert!(slack.iter().all(|&s| s >= 0.0));
     }
+
+    #[test]
+    fn the_box_bound_never_skips_a_violated_pair() {
+        // Potentials at the edge: v_j = c_ij − u ± 1e-9 for the point nearest the box.
+        let mut rng = Rng::new(8);
+        let cloud = crate::tests::random_cloud(&mut rng, 512, 1.0);
+        let y = Clustered::new(&cloud, 16);
+        let mut skipped = 0;
+        for case in 0..200 {
+            let p: crate::Point = std::array::from_fn(|_| 1.4 * rng.uniform() - 0.2);
+            let cj = &y.clusters[case % y.clusters.len()];
+            let u = f64::from(rng.uniform()) - 0.5;
+            let v: Vec<f64> = cj
+                .range
+                .clone()
+                .map(|j| 0.3 * f64::from(rng.uniform()) - u + 1e-9 * f64::from(rng.uniform() - 0.5))
+                .collect();
+            let max_v = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            let box_sq = cj.box_dist_sq(&p);
+            for (k, j) in cj.range.clone().enumerate() {
+                let c = sq_dist_f64(&p, &y.cloud.point(j));
+                assert!(
+                    box_sq <= c,
+                    "case {case}: the box is nearer than its members"
+                );
+                if box_feasible(box_sq, u, max_v) {
+                    assert!(c - u - v[k] >= 0.0, "case {case}, target {j}");
+                }
+            }
+            skipped += usize::from(box_feasible(box_sq, u, max_v));
+        }
+        assert!(skipped > 0 && skipped < 200, "{skipped}");
+        assert!(!box_feasible(f64::NAN, 0.0, 0.0) && !box_feasible(1.0, 0.0, f64::INFINITY));
+    }
 }

@@ -96,6 +96,12 @@ impl ExactState {
         }
     }
 
+    /// The kept target potentials (target input order).
+    #[cfg(test)]
+    pub fn target_potentials(&self) -> &[f64] {
+        &self.v
+    }
+
     /// Whether the state comes from clouds of `n` points.
     pub fn fits(&self, n: usize) -> bool {
         self.perm.len() == n
