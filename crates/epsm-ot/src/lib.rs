@@ -55,6 +55,7 @@ mod blocks;
 pub mod cost;
 mod disjoint_sets;
 pub mod error;
+pub mod estimate;
 pub mod exact;
 mod kernel;
 pub mod plan;
@@ -68,6 +69,7 @@ pub mod warm;
 mod tests;
 
 pub use error::OtError;
+pub use estimate::{MatchEstimate, MatchLimits};
 pub use exact::ExactSettings;
 pub use plan::{EntropicPlan, Matching, OtResult, PhaseTimes, SlicedPlan, SolveStats};
 pub use points::{DIM, Point, PointCloud};
