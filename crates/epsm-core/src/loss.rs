@@ -27,7 +27,7 @@
 //! |---|---|---|---|
 //! | `kind` | — | `ot_exact` | `ot_exact`, `ot_sinkhorn`, `l2` |
 //! | `lambda` | — | 1 | > 0 |
-//! | `match_resolution` | pixels | `[64, 64]` | each in [4, 512] |
+//! | `match_resolution` | pixels | `[64, 64]` | each in [4, 512]; OT: within `epsm_ot::MatchLimits` |
 //! | `blur` | point units | 0.01 | ≥ 1e-4 (Sinkhorn only) |
 //! | `flow` | — | `false` | `true`, `false` |
 

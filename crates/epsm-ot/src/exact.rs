@@ -190,21 +190,22 @@ pub fn solve(
     target: &PointCloud,
     settings: &ExactSettings,
 ) -> Result<OtResult, OtError> {
-    solve_from(source, target, settings, &mut None)
+    solve_from(source, target, settings, None)
 }
 
 /// [`solve`] started from what the previous solve left in `state` (see [`warm`]),
-/// which it replaces with what this one leaves for the next.
+/// which it replaces with what this one leaves for the next; `None`: a cold
+/// solve that keeps nothing.
 ///
-/// `None`, or a state from clouds of another size, starts cold. The state is
-/// emptied when the solve fails, and left empty by the dense solver.
+/// An empty state, or one from clouds of another size, starts cold. The
+/// state is emptied when the solve fails, and left empty by the dense solver.
 pub(crate) fn solve_from(
     source: &PointCloud,
     target: &PointCloud,
     settings: &ExactSettings,
-    state: &mut Option<ExactState>,
+    mut state: Option<&mut Option<ExactState>>,
 ) -> Result<OtResult, OtError> {
-    let previous = state.take();
+    let previous = state.as_mut().and_then(|s| s.take());
     settings.validate()?;
     let n = check_pair(source, target)?;
     if n < settings.dense_below.max(2) {
@@ -258,9 +259,11 @@ pub(crate) fn solve_from(
     for (k, &j) in solved.perm.iter().enumerate() {
         perm[x.order[k] as usize] = y.order[j] as usize;
     }
-    phases.time("warm_keep", || {
-        *state = Some(ExactState::keep(&x, y, &solved, settings.candidates));
-    });
+    if let Some(state) = state {
+        phases.time("warm_keep", || {
+            *state = Some(ExactState::keep(&x, y, &solved, settings.candidates));
+        });
+    }
     solved.stats.phases = phases;
     Ok(dense::permutation_result(
         source,

@@ -434,21 +434,21 @@ pub fn solve(
     target: &PointCloud,
     settings: &SinkhornSettings,
 ) -> Result<OtResult, OtError> {
-    solve_from(source, target, settings, &mut None)
+    solve_from(source, target, settings, None)
 }
 
 /// [`solve`] started from the potentials the previous solve left in `state`
 /// (see `crate::warm`): each entropic problem runs only the polish from them.
-/// The state is replaced by this solve's, or emptied when it fails; a state
-/// from clouds of another size (or without the self-transport potentials
-/// `debias` needs) starts cold.
+/// The state is replaced by this solve's, or emptied when it fails (`None`:
+/// a cold solve that keeps nothing); a state from clouds of another size (or
+/// without the self-transport potentials `debias` needs) starts cold.
 pub(crate) fn solve_from(
     source: &PointCloud,
     target: &PointCloud,
     settings: &SinkhornSettings,
-    state: &mut Option<SinkhornState>,
+    mut state: Option<&mut Option<SinkhornState>>,
 ) -> Result<OtResult, OtError> {
-    let previous = state.take();
+    let previous = state.as_mut().and_then(|s| s.take());
     settings.validate()?;
     let n = check_pair(source, target)?;
     let previous = previous.filter(|p| p.fits(n, settings.debias));
@@ -526,13 +526,15 @@ pub(crate) fn solve_from(
     stats.phases = phases;
     let gradient = centred.gradient(&pull);
     check_finite(loss, &plan, &gradient)?;
-    *state = Some(SinkhornState {
-        plan: Potentials {
-            f: plan.f.clone(),
-            g: plan.g.clone(),
-        },
-        selves,
-    });
+    if let Some(state) = state {
+        *state = Some(SinkhornState {
+            plan: Potentials {
+                f: plan.f.clone(),
+                g: plan.g.clone(),
+            },
+            selves,
+        });
+    }
     Ok(OtResult {
         loss,
         gradient,

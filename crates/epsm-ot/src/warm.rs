@@ -113,7 +113,7 @@ impl Matcher {
                     Some(SolverState::Exact(e)) => Some(e),
                     _ => None,
                 };
-                let result = crate::exact::solve_from(source, target, s, &mut e);
+                let result = crate::exact::solve_from(source, target, s, Some(&mut e));
                 (result, e.map(SolverState::Exact))
             }
             Self::Sinkhorn(s) => {
@@ -121,7 +121,7 @@ impl Matcher {
                     Some(SolverState::Sinkhorn(e)) => Some(e),
                     _ => None,
                 };
-                let result = crate::sinkhorn::solve_from(source, target, s, &mut e);
+                let result = crate::sinkhorn::solve_from(source, target, s, Some(&mut e));
                 (result, e.map(SolverState::Sinkhorn))
             }
             Self::Sliced(s) => (crate::sliced::solve(source, target, s), None),

@@ -30,11 +30,15 @@
 //! (truncated updates at the remaining scales), `polish` (final-ε updates to
 //! the marginal tolerance), `barycentres`; exact: `warm_start` (the entropic
 //! solve), `candidates` (the sparse graph), `auction`, `augment` (shortest
-//! augmenting paths), `check` (optimality checks over all pairs).
+//! augmenting paths), `check` (optimality checks over all pairs), `warm_keep`
+//! (what a solve keeps for a warm start, see `epsm_ot::MatchState`).
 //!
 //! ```text
 //! epsm bench ot --n 4096 --solver exact --json
 //! ```
+//!
+//! With `--sequence K` it instead times cold against warm-started solves
+//! along a rendered sequence ([`sequence`]).
 
 use std::collections::BTreeMap;
 use std::time::Instant;
