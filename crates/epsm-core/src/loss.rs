@@ -27,11 +27,11 @@
 //! |---|---|---|---|
 //! | `kind` | — | `ot_exact` | `ot_exact`, `ot_sinkhorn`, `l2` |
 //! | `lambda` | — | 1 | > 0 |
-//! | `match_resolution` | pixels | `[64, 64]` | each in [4, 512] |
+//! | `match_resolution` | pixels | `[64, 64]` | each in [4, 512]; OT: within `epsm_ot::MatchLimits` |
 //! | `blur` | point units | 0.01 | ≥ 1e-4 (Sinkhorn only) |
 //! | `flow` | — | `false` | `true`, `false` |
 
-use epsm_ot::{Matcher, PointCloud, SinkhornSettings, SolveStats};
+use epsm_ot::{MatchState, Matcher, PointCloud, SinkhornSettings, SolveStats};
 use epsm_render::Image;
 use glam::{DVec2, DVec3, Vec2, Vec3};
 use serde::{Deserialize, Serialize};
@@ -56,6 +56,18 @@ impl LossKind {
     /// Whether the loss gives screen-position gradients.
     pub fn is_ot(self) -> bool {
         !matches!(self, LossKind::L2)
+    }
+
+    /// The matcher of an OT loss (`None` for L2).
+    pub fn matcher(self) -> Option<Matcher> {
+        match self {
+            LossKind::L2 => None,
+            LossKind::OtExact => Some(Matcher::exact()),
+            LossKind::OtSinkhorn { blur } => Some(Matcher::Sinkhorn(SinkhornSettings {
+                blur,
+                ..SinkhornSettings::default()
+            })),
+        }
     }
 }
 
@@ -169,7 +181,21 @@ pub fn points(image: &Image, lambda: f32) -> OptResult<PointCloud> {
 }
 
 /// Evaluates `kind` between `image` and `target` (same size).
-pub fn evaluate(kind: LossKind, image: &Image, target: &Image, lambda: f64) -> OptResult<LossEval> {
+///
+/// With `warm`, the exact OT loss starts from what the previous evaluation
+/// left there and leaves its own ([`MatchState`]): the same optimal loss as
+/// a cold solve, much faster along an optimization, the matching (and so the
+/// gradient) different only where several matchings have the same cost. The
+/// entropic loss always solves cold (a warm start was no faster on noisy
+/// renders and would change its result within the marginal tolerance), and
+/// L2 has no matching.
+pub fn evaluate(
+    kind: LossKind,
+    image: &Image,
+    target: &Image,
+    lambda: f64,
+    warm: Option<&mut MatchState>,
+) -> OptResult<LossEval> {
     if (image.width, image.height) != (target.width, target.height) {
         return Err(OptimizeError::Invalid(format!(
             "loss: image is {}x{} but the target is {}x{}",
@@ -179,17 +205,18 @@ pub fn evaluate(kind: LossKind, image: &Image, target: &Image, lambda: f64) -> O
     check_finite(image, "rendered image")?;
     check_finite(target, "target")?;
     let n = image.pixels.len();
-    let matcher = match kind {
-        LossKind::L2 => return Ok(l2(image, target)),
-        LossKind::OtExact => Matcher::exact(),
-        LossKind::OtSinkhorn { blur } => Matcher::Sinkhorn(SinkhornSettings {
-            blur,
-            ..SinkhornSettings::default()
-        }),
+    let Some(matcher) = kind.matcher() else {
+        return Ok(l2(image, target));
     };
     let lambda32 = lambda as f32;
     let source = points(image, lambda32)?;
-    let result = matcher.solve(&source, &points(target, lambda32)?)?;
+    let target_points = points(target, lambda32)?;
+    let result = match warm {
+        Some(state) if kind == LossKind::OtExact => {
+            matcher.solve_warm(&source, &target_points, state)?
+        }
+        _ => matcher.solve(&source, &target_points)?,
+    };
     let (w, h) = (f64::from(image.width), f64::from(image.height));
     let mut g_rgb = Vec::with_capacity(n);
     let mut g_xy = Vec::with_capacity(n);
@@ -373,7 +400,7 @@ mod tests {
     #[test]
     fn ot_pulls_a_bright_pixel_toward_the_target_one() {
         let (img, target) = (dot(8, 8, (1, 4)), dot(8, 8, (6, 4)));
-        let e = evaluate(LossKind::OtExact, &img, &target, 1.0).expect("loss");
+        let e = evaluate(LossKind::OtExact, &img, &target, 1.0, None).expect("loss");
         let i = 4 * 8 + 1;
         // Moving the bright pixel right (+x) lowers the loss.
         assert!(e.g_xy[i].x < 0.0, "g_xy = {:?}", e.g_xy[i]);
@@ -389,12 +416,12 @@ mod tests {
     #[test]
     fn l2_gradient_matches_a_finite_difference() {
         let (img, target) = (dot(4, 4, (1, 1)), dot(4, 4, (2, 2)));
-        let e = evaluate(LossKind::L2, &img, &target, 1.0).expect("loss");
+        let e = evaluate(LossKind::L2, &img, &target, 1.0, None).expect("loss");
         let h = 1e-2;
         let at = |d: f32| {
             let mut bumped = img.clone();
             bumped.pixels[5].x += d;
-            evaluate(LossKind::L2, &bumped, &target, 1.0)
+            evaluate(LossKind::L2, &bumped, &target, 1.0, None)
                 .expect("loss")
                 .value
         };
@@ -425,7 +452,7 @@ mod tests {
         // content moves with dp/ds = (1, 0), so dL/ds = Σ g_xy.x.
         let (target, s, h) = (blob(8.0), 1.5f32, 0.02f32);
         let at = |shift: f32| {
-            evaluate(LossKind::OtExact, &blob(8.0 + shift), &target, 1.0).expect("loss")
+            evaluate(LossKind::OtExact, &blob(8.0 + shift), &target, 1.0, None).expect("loss")
         };
         let fd = (at(s + h).value - at(s - h).value) / f64::from(2.0 * h);
         let mut e = at(s);
@@ -444,6 +471,31 @@ mod tests {
     }
 
     #[test]
+    fn a_warm_exact_loss_equals_the_cold_one_along_a_moving_blob() {
+        let target = blob(8.0);
+        let mut state = MatchState::new();
+        for step in 0..4 {
+            let image = blob(5.0 + 0.3 * step as f32);
+            let cold = evaluate(LossKind::OtExact, &image, &target, 1.0, None).expect("loss");
+            let warm =
+                evaluate(LossKind::OtExact, &image, &target, 1.0, Some(&mut state)).expect("loss");
+            assert!(!state.is_empty(), "step {step}: the state is kept");
+            assert!(
+                (warm.value - cold.value).abs() <= 1e-12 * cold.value,
+                "step {step}: {} vs {}",
+                warm.value,
+                cold.value
+            );
+            // The gradients sum alike (a different matching among ties moves no total).
+            let sum = |e: &LossEval| e.g_xy.iter().map(|g| g.x).sum::<f64>();
+            assert!((sum(&warm) - sum(&cold)).abs() < 1e-6, "step {step}");
+        }
+        // L2 leaves the state alone.
+        evaluate(LossKind::L2, &target, &target, 1.0, Some(&mut state)).expect("loss");
+        assert!(!state.is_empty());
+    }
+
+    #[test]
     fn a_non_finite_pixel_fails_every_loss_naming_the_pixel() {
         // OT: instead of matching it as black; L2: instead of a NaN loss.
         for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
@@ -454,7 +506,7 @@ mod tests {
             for (image, target, which) in [(&img, &dot2, "rendered image"), (&dot2, &img, "target")]
             {
                 for kind in [LossKind::OtExact, LossKind::L2] {
-                    let e = evaluate(kind, image, target, 1.0);
+                    let e = evaluate(kind, image, target, 1.0, None);
                     assert!(
                         matches!(
                             e,
@@ -494,7 +546,7 @@ mod tests {
         let (mut img, mut target) = (Image::new(2, 1), Image::new(2, 1));
         img.set(0, 0, Vec3::splat(1e20));
         target.set(0, 0, Vec3::splat(-1e20));
-        let e = evaluate(LossKind::L2, &img, &target, 1.0).expect("loss");
+        let e = evaluate(LossKind::L2, &img, &target, 1.0, None).expect("loss");
         let d = 2.0 * f64::from(1e20f32);
         assert!((e.value / (d * d / 2.0) - 1.0).abs() < 1e-15, "{}", e.value);
         assert!((e.value / 2e40 - 1.0).abs() < 1e-6);
@@ -507,13 +559,22 @@ mod tests {
         // The extremes of f32: still finite.
         img.set(0, 0, Vec3::splat(f32::MAX));
         target.set(0, 0, Vec3::splat(-f32::MAX));
-        let e = evaluate(LossKind::L2, &img, &target, 1.0).expect("loss");
+        let e = evaluate(LossKind::L2, &img, &target, 1.0, None).expect("loss");
         assert!(e.value.is_finite() && e.g_rgb[0].is_finite() && rmse(&img, &target).is_finite());
     }
 
     #[test]
     fn mismatched_sizes_are_an_error() {
-        assert!(evaluate(LossKind::L2, &Image::new(2, 2), &Image::new(3, 2), 1.0).is_err());
+        assert!(
+            evaluate(
+                LossKind::L2,
+                &Image::new(2, 2),
+                &Image::new(3, 2),
+                1.0,
+                None
+            )
+            .is_err()
+        );
         assert_eq!(resample(&dot(4, 4, (0, 0)), 2, 2).get(0, 0), Vec3::ONE);
     }
 

@@ -42,6 +42,26 @@ pub(crate) struct Cluster {
     pub centroid: [f64; DIM],
     /// Largest distance of a member to the centroid.
     pub radius: f64,
+    /// Bounding box of the members: smallest coordinates.
+    pub lo: Point,
+    /// Bounding box of the members: largest coordinates.
+    pub hi: Point,
+}
+
+impl Cluster {
+    /// `Σ_d gap_d²` with `gap_d` the distance of `p` to the bounding box along
+    /// axis `d`: at most `‖p − q‖²` for every member `q` (in `f64`, rounded
+    /// down by at most 3 units of the last place).
+    pub fn box_dist_sq(&self, p: &Point) -> f64 {
+        (0..DIM)
+            .map(|d| {
+                let gap = (f64::from(self.lo[d]) - f64::from(p[d]))
+                    .max(f64::from(p[d]) - f64::from(self.hi[d]))
+                    .max(0.0);
+                gap * gap
+            })
+            .sum()
+    }
 }
 
 /// A cloud reordered by cluster.
@@ -113,6 +133,11 @@ impl Clustered {
         self.clusters.iter().map(|c| c.range.clone()).collect()
     }
 
+    /// Copies values given in the input order into the reordered indexing (the inverse of [`Self::unsort`]).
+    pub fn sorted<T: Copy>(&self, values: &[T]) -> Vec<T> {
+        self.order.iter().map(|&i| values[i as usize]).collect()
+    }
+
     /// Copies values given in the reordered indexing back to the input order.
     pub fn unsort<T: Copy + Default>(&self, values: &[T]) -> Vec<T> {
         let mut out = vec![T::default(); values.len()];
@@ -155,8 +180,22 @@ fn make_cluster(cloud: &PointCloud, range: Range<usize>) -> Cluster {
                 .sqrt()
         })
         .fold(0.0, f64::max);
+    let lo = std::array::from_fn(|d| {
+        cols[d][range.clone()]
+            .iter()
+            .copied()
+            .fold(f32::INFINITY, f32::min)
+    });
+    let hi = std::array::from_fn(|d| {
+        cols[d][range.clone()]
+            .iter()
+            .copied()
+            .fold(f32::NEG_INFINITY, f32::max)
+    });
     Cluster {
         range,
+        lo,
+        hi,
         centroid,
         radius: radius * (1.0 + 1e-9) + 1e-12,
     }

@@ -112,6 +112,29 @@ pub enum OtError {
         /// `2⁻²⁴ diameter² / ε`: the `f32` rounding of the largest kernel scores, in units of ε.
         rounding: f64,
     },
+    /// A match expected to take more time or memory than the limits allow
+    /// (`crate::estimate`): refused before it runs.
+    #[error(
+        "matching {n} points per cloud with the {matcher} solver is estimated at {seconds:.0} s and \
+         {mb:.0} MB per solve, beyond the limits of {max_seconds:.0} s and {max_mb:.0} MB: \
+         use fewer points (a lower match resolution)",
+        mb = bytes / 1e6,
+        max_mb = max_bytes / 1e6
+    )]
+    MatchTooLarge {
+        /// The matcher: `exact`, `sinkhorn` or `sliced`.
+        matcher: &'static str,
+        /// Points per cloud.
+        n: usize,
+        /// Estimated seconds per solve.
+        seconds: f64,
+        /// Estimated bytes per solve.
+        bytes: f64,
+        /// The limit on seconds.
+        max_seconds: f64,
+        /// The limit on bytes.
+        max_bytes: f64,
+    },
     /// A source point's row of the entropic plan has no mass (no target
     /// streamed, or no finite kernel score), so its barycentre is undefined.
     #[error("a source point's row of the entropic plan has no finite mass at ε = {eps:e}")]

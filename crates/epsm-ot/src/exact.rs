@@ -47,23 +47,28 @@
 //! | `exact.tolerance`      | reduced cost counted as a violation below −tolerance | 1e-11 |
 //! | `exact.auction_start`  | first ε of the auction, × diameter²        | 0.025   |
 //! | `exact.auction_end`    | last ε of the auction, × diameter²         | 2.5e-10 |
+//! | `exact.warm_auction_start` | first ε of a warm-started solve's auctions, × diameter² | 1e-4 |
 //! | `exact.warm_start`     | Sinkhorn settings of the warm start        | blur 0.03, one update per scale, ≤ 10 polish updates |
 
 mod auction;
+mod check;
 pub mod dense;
 mod sparse;
+pub(crate) mod warm;
 
 use std::time::Instant;
 
 use rayon::prelude::*;
 
-use crate::blocks::{Clustered, Support, fit_potentials, kept_targets};
+use crate::blocks::{Clustered, Support};
 use crate::cost::{check_spread, diameter_sq, sq_dist_f64};
 use crate::error::OtError;
 use crate::plan::{OtResult, PhaseTimes, SolveStats};
 use crate::points::{PointCloud, check_pair};
 use crate::sinkhorn::{SinkhornSettings, check_range, solve_dual};
+use check::violations;
 use sparse::SparseAssignment;
+pub(crate) use warm::ExactState;
 
 /// The largest accepted squared diameter of the two clouds together ([`OtError::SpreadTooLarge`]).
 ///
@@ -100,6 +105,9 @@ pub struct ExactSettings {
     pub auction_start: f64,
     /// Last ε of the auction, before the exact finish, in units of the clouds' squared diameter.
     pub auction_end: f64,
+    /// First ε of the auctions of a warm-started solve (`crate::warm`), whose
+    /// prices start near the optimum, in units of the clouds' squared diameter.
+    pub warm_auction_start: f64,
 }
 
 impl Default for ExactSettings {
@@ -122,6 +130,7 @@ impl Default for ExactSettings {
             // benchmark's blobs pairs: 4.4).
             auction_start: 0.025,
             auction_end: 2.5e-10,
+            warm_auction_start: 1e-4,
         }
     }
 }
@@ -161,6 +170,13 @@ impl ExactSettings {
                 reason: "need auction_start >= auction_end > 0",
             });
         }
+        if !(self.warm_auction_start >= self.auction_end && self.warm_auction_start.is_finite()) {
+            return Err(OtError::InvalidSetting {
+                key: "exact.warm_auction_start",
+                value: self.warm_auction_start,
+                reason: "need warm_auction_start >= auction_end > 0",
+            });
+        }
         self.warm_start.validate()
     }
 }
@@ -174,6 +190,22 @@ pub fn solve(
     target: &PointCloud,
     settings: &ExactSettings,
 ) -> Result<OtResult, OtError> {
+    solve_from(source, target, settings, None)
+}
+
+/// [`solve`] started from what the previous solve left in `state` (see [`warm`]),
+/// which it replaces with what this one leaves for the next; `None`: a cold
+/// solve that keeps nothing.
+///
+/// An empty state, or one from clouds of another size, starts cold. The
+/// state is emptied when the solve fails, and left empty by the dense solver.
+pub(crate) fn solve_from(
+    source: &PointCloud,
+    target: &PointCloud,
+    settings: &ExactSettings,
+    mut state: Option<&mut Option<ExactState>>,
+) -> Result<OtResult, OtError> {
+    let previous = state.as_mut().and_then(|s| s.take());
     settings.validate()?;
     let n = check_pair(source, target)?;
     if n < settings.dense_below.max(2) {
@@ -181,19 +213,58 @@ pub fn solve(
     }
     let diam2 = checked_diameter_sq(source, target)?;
     let mut phases = PhaseTimes::default();
+    let previous = previous.filter(|p| p.fits(n));
     let (x, y) = phases.time("cluster", || {
-        (
-            Clustered::new(source, settings.warm_start.cluster_size),
-            Clustered::new(target, settings.warm_start.cluster_size),
-        )
+        let cluster_size = settings.warm_start.cluster_size;
+        let y = previous
+            .as_ref()
+            .and_then(|p| p.clustered_target(target))
+            .unwrap_or_else(|| Clustered::new(target, cluster_size));
+        (Clustered::new(source, cluster_size), y)
     });
-    let mut solved = solve_sorted(&x, &y, diam2, settings);
+    let mut solved = match &previous {
+        Some(p) => {
+            // Kept graph and potentials, completed by a check; then the auction
+            // from the kept prices at a small ε, and the same finish as a cold solve.
+            let per_row = VIOLATORS_PER_CANDIDATE * settings.candidates;
+            let warm = phases.time("warm_graph", || {
+                p.start(&x, &y, settings.tolerance, per_row)
+            });
+            let mut stats = SolveStats {
+                warm_starts: 1,
+                pair_evaluations: warm.pairs,
+                added_pairs: warm.added,
+                ..SolveStats::default()
+            };
+            let (edges, v) = warm.assignment.into_parts();
+            let (v, finished) = phases.time("auction", || {
+                auction_potentials(&edges, v, diam2, settings.warm_auction_start, settings)
+            });
+            stats.auction_budget_stops += usize::from(!finished);
+            let lsap = SparseAssignment::new(edges, v);
+            finish(
+                &x,
+                &y,
+                diam2,
+                settings,
+                lsap,
+                stats,
+                settings.warm_auction_start,
+            )
+        }
+        None => solve_sorted(&x, &y, diam2, settings),
+    };
     phases.merge(&solved.stats.phases);
-    solved.stats.phases = phases;
     let mut perm = vec![0usize; n];
     for (k, &j) in solved.perm.iter().enumerate() {
         perm[x.order[k] as usize] = y.order[j] as usize;
     }
+    if let Some(state) = state {
+        phases.time("warm_keep", || {
+            *state = Some(ExactState::keep(&x, y, &solved, settings.candidates));
+        });
+    }
+    solved.stats.phases = phases;
     Ok(dense::permutation_result(
         source,
         target,
@@ -210,6 +281,8 @@ pub(crate) struct SortedAssignment {
     pub u: Vec<f64>,
     /// Column potentials.
     pub v: Vec<f64>,
+    /// The final candidate graph: per sorted source, (sorted target, cost).
+    pub edges: Vec<Vec<(u32, f64)>>,
     /// Work counters.
     pub stats: SolveStats,
 }
@@ -319,7 +392,7 @@ fn sparse_prices(
     phases.add("candidates", candidates_start.elapsed().as_secs_f64());
     // Price discovery by auction, then an exact shortest-augmenting-path finish.
     let (v, finished) = phases.time("auction", || {
-        auction_potentials(&edges, g, diameter_sq, settings)
+        auction_potentials(&edges, g, diameter_sq, settings.auction_start, settings)
     });
     stats.auction_budget_stops += usize::from(!finished);
     stats.phases = phases;
@@ -333,18 +406,41 @@ pub(crate) fn solve_sorted(
     diameter_sq: f64,
     settings: &ExactSettings,
 ) -> SortedAssignment {
+    let Prices { edges, v, stats } = sparse_prices(x, y, diameter_sq, settings);
+    finish(
+        x,
+        y,
+        diameter_sq,
+        settings,
+        SparseAssignment::new(edges, v),
+        stats,
+        settings.auction_start,
+    )
+}
+
+/// Steps 3–4 of the module doc from a sparse assignment: shortest augmenting
+/// paths, then optimality checks adding violated pairs, until the check finds none.
+///
+/// Any start gives the optimal matching: the loop ends only on a check of all
+/// pairs against the final potentials (rows whose potential did not rise
+/// since an earlier check cannot have gained a violation). `stats` carries
+/// the work done before; re-pricing auctions start at `auction_start` (× diameter²).
+fn finish(
+    x: &Clustered,
+    y: &Clustered,
+    diameter_sq: f64,
+    settings: &ExactSettings,
+    mut lsap: SparseAssignment,
+    mut stats: SolveStats,
+    auction_start: f64,
+) -> SortedAssignment {
     let n = x.cloud.len();
     let k = settings.candidates;
-    let Prices {
-        edges,
-        v,
-        mut stats,
-    } = sparse_prices(x, y, diameter_sq, settings);
     let mut phases = std::mem::take(&mut stats.phases);
-    let mut lsap = SparseAssignment::new(edges, v);
+    let first = stats.iterations;
     loop {
         stats.iterations += 1;
-        if stats.iterations > 1 && lsap.free_rows().len() * REPRICE_BELOW > n {
+        if stats.iterations > first + 1 && lsap.free_rows().len() * REPRICE_BELOW > n {
             // Many rows are free (added violated edges unmatch their rows): re-price
             // all rows by auction from the current prices, far cheaper than one
             // shortest-augmenting-path search per free row from poor potentials.
@@ -352,7 +448,7 @@ pub(crate) fn solve_sorted(
             // the rows its greedy start leaves free are each a short search.)
             let (edges, v) = lsap.into_parts();
             let (v, finished) = phases.time("auction", || {
-                auction_potentials(&edges, v, diameter_sq, settings)
+                auction_potentials(&edges, v, diameter_sq, auction_start, settings)
             });
             stats.auction_budget_stops += usize::from(!finished);
             lsap = SparseAssignment::new(edges, v);
@@ -396,10 +492,13 @@ pub(crate) fn solve_sorted(
         if violations.is_empty() {
             stats.candidate_pairs = lsap.edge_count();
             stats.phases = phases;
+            let perm = lsap.permutation();
+            let (edges, u, v) = lsap.into_potentials();
             return SortedAssignment {
-                perm: lsap.permutation(),
-                u: lsap.u,
-                v: lsap.v,
+                perm,
+                u,
+                v,
+                edges,
                 stats,
             };
         }
@@ -411,7 +510,7 @@ pub(crate) fn solve_sorted(
 /// Column potentials from an ε-scaling auction on `edges` started at prices `−v`,
 /// and whether the auction finished.
 ///
-/// Its ε runs from `auction_start` to `auction_end` times `diameter_sq` (1 for
+/// Its ε runs from `auction_start` to `settings.auction_end` times `diameter_sq` (1 for
 /// clouds of one point repeated, whose costs are all 0).
 ///
 /// If a phase runs out of bids the prices reached so far are returned: they
@@ -422,6 +521,7 @@ fn auction_potentials(
     edges: &[Vec<(u32, f64)>],
     v: Vec<f64>,
     diameter_sq: f64,
+    auction_start: f64,
     settings: &ExactSettings,
 ) -> (Vec<f64>, bool) {
     let unit = if diameter_sq > 0.0 { diameter_sq } else { 1.0 };
@@ -429,7 +529,7 @@ fn auction_potentials(
     let finished = auction::run(
         edges,
         &mut q,
-        settings.auction_start * unit,
+        auction_start * unit,
         settings.auction_end * unit,
         0.2,
     );
@@ -478,185 +578,4 @@ fn best_partners(
             })
         })
         .collect()
-}
-
-/// A candidate edge `(row, column, cost)`.
-type Edge = (u32, u32, f64);
-
-/// For each row flagged in `rows`, its `per_row` most violated pairs
-/// (`c_ij − u_i − v_j < −tolerance`), and the number of pairs evaluated.
-///
-/// Each pair is first screened in `f32` (see [`screened_block`]); only pairs
-/// the screen cannot rule out are tested in `f64`, so no violation is missed.
-fn violations(
-    x: &Clustered,
-    y: &Clustered,
-    u: &[f64],
-    v: &[f64],
-    tolerance: f64,
-    per_row: usize,
-    rows: &[bool],
-) -> (Vec<Edge>, u64) {
-    let (fit_u, fit_v) = (fit_potentials(x, u), fit_potentials(y, v));
-    let (u32s, v32s) = (to_f32(u), to_f32(v));
-    // Potentials beyond the f32 range: no screen, every pair is tested in f64.
-    let screen = u32s.iter().chain(&v32s).all(|t| t.is_finite());
-    let cols = y.cloud.columns();
-    let parts: Vec<(Vec<Edge>, u64)> = x
-        .clusters
-        .par_iter()
-        .zip(&fit_u)
-        .map(|(ci, fi)| {
-            let mut found = Vec::new();
-            let mut checked = 0u64;
-            if !rows[ci.range.clone()].iter().any(|&r| r) {
-                return (found, checked);
-            }
-            let list = kept_targets(ci, fi, y, &fit_v, 0.0);
-            let width: u64 = list
-                .iter()
-                .map(|&jb| y.clusters[jb as usize].range.len() as u64)
-                .sum();
-            let mut slack = [0.0f32; SCREEN_BLOCK];
-            for i in ci.range.clone().filter(|&i| rows[i]) {
-                let p = x.cloud.point(i);
-                let mut row: Vec<(f64, u32, f64)> = Vec::new();
-                for &jb in &list {
-                    let range = y.clusters[jb as usize].range.clone();
-                    for start in range.clone().step_by(SCREEN_BLOCK) {
-                        let block = start..(start + SCREEN_BLOCK).min(range.end);
-                        let slack = &mut slack[..block.len()];
-                        screened_block(&p, u32s[i], cols, &v32s, block.clone(), slack);
-                        for (j, &s) in block.zip(slack.iter()) {
-                            if screen && s >= 0.0 {
-                                continue;
-                            }
-                            let c = sq_dist_f64(&p, &y.cloud.point(j));
-                            let reduced = c - u[i] - v[j];
-                            // Rounding of c, u and v is not a violation (matters for far-apart clouds).
-                            if reduced
-                                < -(tolerance + 4.0 * f64::EPSILON * (c + u[i].abs() + v[j].abs()))
-                            {
-                                row.push((reduced, j as u32, c));
-                                if row.len() == 4 * per_row {
-                                    keep_worst(&mut row, per_row);
-                                }
-                            }
-                        }
-                    }
-                }
-                keep_worst(&mut row, per_row);
-                found.extend(row.into_iter().map(|(_, j, c)| (i as u32, j, c)));
-                checked += width;
-            }
-            (found, checked)
-        })
-        .collect();
-    let checked = parts.iter().map(|p| p.1).sum();
-    (parts.into_iter().flat_map(|p| p.0).collect(), checked)
-}
-
-/// Keeps the `per_row` most violated pairs (smallest reduced cost, ties by column) of `row`.
-fn keep_worst(row: &mut Vec<(f64, u32, f64)>, per_row: usize) {
-    if row.len() > per_row {
-        row.select_nth_unstable_by(per_row, |a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        row.truncate(per_row);
-    }
-}
-
-/// Targets screened per call of [`screened_block`].
-const SCREEN_BLOCK: usize = 64;
-
-/// Relative margin of the `f32` screen: four times its worst rounding error (see [`screened_block`]).
-const SCREEN_MARGIN: f32 = 4e-6;
-
-/// Absolute margin of the `f32` screen, above the error of squares that underflow (< 10⁻³⁷).
-const SCREEN_FLOOR: f32 = 1e-36;
-
-/// Potentials rounded to `f32` (infinite where out of range).
-fn to_f32(p: &[f64]) -> Vec<f32> {
-    p.iter().map(|&t| t as f32).collect()
-}
-
-/// `f32` screen of the reduced costs of point `p` (row potential `u`) against the targets `block`.
-///
-/// Writes `s_j = r_j − m_j` with `r_j = c_ij − u − v_j` computed in `f32` and
-/// the margin `m_j = 4·10⁻⁶ (c_ij + |v_j| + |u|) + 10⁻³⁶`. The `f32` cost of `f32`
-/// inputs is within `4.2·10⁻⁷ c_ij` of the exact one (exactly rounded
-/// differences, squares and a sum of five non-negative terms), the rounded
-/// potentials within `6·10⁻⁸` of theirs, and the two subtractions add at most
-/// `6·10⁻⁸ (c + |v| + |u|)` each, so `|r_j − (c − u − v)| < 10⁻⁶ (c + |v| + |u|)`
-/// (plus under 10⁻³⁷ where squares underflow):
-/// `s_j ≥ 0` proves `c − u − v > 0`, not a violation. (With finite `f32`
-/// potentials an infinite cost gives `s_j = NaN`, which the caller tests in `f64`.)
-/// Written as one branch-free loop over SoA columns so it vectorises.
-fn screened_block(
-    p: &crate::Point,
-    u: f32,
-    cols: &[Vec<f32>; crate::DIM],
-    v: &[f32],
-    block: std::ops::Range<usize>,
-    out: &mut [f32],
-) {
-    let len = out.len();
-    let start = block.start;
-    // Equal-length slices, so the loop runs without bounds checks and vectorises.
-    let (c0, c1, c2, c3, c4) = (
-        &cols[0][start..start + len],
-        &cols[1][start..start + len],
-        &cols[2][start..start + len],
-        &cols[3][start..start + len],
-        &cols[4][start..start + len],
-    );
-    let v = &v[start..start + len];
-    for k in 0..len {
-        let d0 = p[0] - c0[k];
-        let d1 = p[1] - c1[k];
-        let d2 = p[2] - c2[k];
-        let d3 = p[3] - c3[k];
-        let d4 = p[4] - c4[k];
-        let c = d0 * d0 + d1 * d1 + d2 * d2 + d3 * d3 + d4 * d4;
-        out[k] = (c - v[k] - u) - (SCREEN_MARGIN * (c + v[k].abs() + u.abs()) + SCREEN_FLOOR);
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::synthetic::Rng;
-
-    #[test]
-    fn f32_screen_never_rules_out_a_negative_reduced_cost() {
-        // Potentials chosen so reduced costs straddle zero by less than f32 rounding.
-        let mut rng = Rng::new(5);
-        let n = 200;
-        let cols: [Vec<f32>; crate::DIM] =
-            std::array::from_fn(|_| (0..n).map(|_| 3.0 * rng.uniform() - 1.0).collect());
-        for case in 0..50 {
-            let p: crate::Point = std::array::from_fn(|_| 3.0 * rng.uniform() - 1.0);
-            let u = 10.0 * f64::from(rng.uniform()) - 5.0;
-            let v: Vec<f64> = (0..n)
-                .map(|j| {
-                    let c = sq_dist_f64(&p, &std::array::from_fn(|d| cols[d][j]));
-                    c - u + 1e-7 * (f64::from(rng.uniform()) - 0.5)
-                })
-                .collect();
-            let mut slack = vec![0.0f32; n];
-            screened_block(&p, u as f32, &cols, &to_f32(&v), 0..n, &mut slack);
-            let mut ruled_out = 0;
-            for (j, &s) in slack.iter().enumerate() {
-                let c = sq_dist_f64(&p, &std::array::from_fn(|d| cols[d][j]));
-                if s >= 0.0 {
-                    ruled_out += 1;
-                    assert!(c - u - v[j] >= 0.0, "case {case}, target {j}");
-                }
-            }
-            assert!(ruled_out < n, "case {case}: near-tight pairs must be kept");
-        }
-        // Clearly positive reduced costs are ruled out.
-        let p = [0.0; crate::DIM];
-        let mut slack = vec![0.0f32; n];
-        screened_block(&p, -1.0, &cols, &vec![0.0; n], 0..n, &mut slack);
-        assert!(slack.iter().all(|&s| s >= 0.0));
-    }
 }

@@ -55,6 +55,7 @@ mod blocks;
 pub mod cost;
 mod disjoint_sets;
 pub mod error;
+pub mod estimate;
 pub mod exact;
 mod kernel;
 pub mod plan;
@@ -62,16 +63,19 @@ pub mod points;
 pub mod sinkhorn;
 pub mod sliced;
 pub mod synthetic;
+pub mod warm;
 
 #[cfg(test)]
 mod tests;
 
 pub use error::OtError;
+pub use estimate::{MatchEstimate, MatchLimits};
 pub use exact::ExactSettings;
 pub use plan::{EntropicPlan, Matching, OtResult, PhaseTimes, SlicedPlan, SolveStats};
 pub use points::{DIM, Point, PointCloud};
 pub use sinkhorn::{MAX_SPREAD, MIN_BLUR, SinkhornSettings};
 pub use sliced::SlicedSettings;
+pub use warm::MatchState;
 
 /// Which solver to use, with its settings: one interface for all of them.
 #[derive(Debug, Clone, PartialEq)]

@@ -94,6 +94,10 @@ pub struct SolveStats {
     /// warm start's range or its potentials were not finite (exact solver, and
     /// the exact solves of the entropic solver's `exact_prices`).
     pub cold_starts: usize,
+    /// Solves started from the state a previous solve left (`crate::MatchState`):
+    /// 1 for a warm-started exact or entropic solve (per entropic problem: up
+    /// to 3 with `debias`), 0 for a cold one.
+    pub warm_starts: usize,
     /// L1 marginal error of the plan (entropic solver).
     pub marginal_error: Option<f64>,
     /// Entropic solves (the plan's, and with `debias` the two self-transport

@@ -311,26 +311,59 @@ struct Solved {
     value: f64,
     transport_cost: f64,
     pairs: u64,
+    /// Whether the solve started from kept potentials.
+    warm: bool,
 }
 
+/// Source and target potentials of one entropic problem.
+#[derive(Debug, Clone)]
+pub(crate) struct Potentials {
+    f: Vec<f64>,
+    g: Vec<f64>,
+}
+
+/// What an entropic solve leaves for the next one (see `crate::warm`), in the clouds' input orders.
+#[derive(Debug, Clone)]
+pub(crate) struct SinkhornState {
+    /// The plan's potentials, of the clouds as given (not centred).
+    plan: Potentials,
+    /// With `debias`: the self-transport potentials of the source, then of
+    /// the target (the same for the clouds centred or not).
+    selves: Option<[Potentials; 2]>,
+}
+
+impl SinkhornState {
+    /// Whether the state comes from clouds of `n` points, with the self-transport potentials iff `debias`.
+    fn fits(&self, n: usize, debias: bool) -> bool {
+        self.plan.f.len() == n && self.selves.is_some() == debias
+    }
+}
+
+/// Solves one entropic problem, by the polish alone when `start` gives potentials
+/// (clustered orders) and that polish converges, else from scratch.
 fn solve_one(
     x: &Clustered,
     y: &Clustered,
     diam2: f64,
     settings: &SinkhornSettings,
+    start: Option<Potentials>,
 ) -> Result<Solved, OtError> {
-    let mut dual = if settings.exact_prices {
-        // Start the final-ε iterations from the optimal assignment's dual potentials.
-        let ex = crate::exact::solve_sorted(x, y, diam2, &crate::ExactSettings::default());
-        let guards = Guards::of_exact(&ex.stats);
-        let mut phases = ex.stats.phases;
-        let mut dual = polish(x, y, ex.u, ex.v, settings, ex.stats.pair_evaluations, 0);
-        dual.guards = guards;
-        phases.merge(&dual.phases);
-        dual.phases = phases;
-        dual
-    } else {
-        solve_dual(x, y, diam2, settings)
+    let kept = start.map(|Potentials { f, g }| polish(x, y, f, g, settings, 0, 0));
+    // A polish from kept potentials that did not converge (a stall, or out of
+    // updates) is replaced by the cold solve, its work still counted.
+    let (warm, mut dual) = match kept {
+        Some(d) if converged(d.marginal_error, settings.marginal_tolerance) => (true, d),
+        kept => {
+            let mut dual = cold_dual(x, y, diam2, settings);
+            if let Some(k) = kept {
+                dual.pairs += k.pairs;
+                dual.iterations += k.iterations;
+                let mut phases = k.phases;
+                phases.merge(&dual.phases);
+                dual.phases = phases;
+            }
+            (false, dual)
+        }
     };
     if !dual.marginal_error.is_finite() {
         // Not a plan at all: no barycentres from it (`rounding` says why, see the error).
@@ -356,7 +389,26 @@ fn solve_one(
         value,
         transport_cost,
         pairs,
+        warm,
     })
+}
+
+/// The dual potentials of one entropic problem solved from scratch: the
+/// ε-scaling loop, or with `exact_prices` the polish from the exact duals.
+fn cold_dual(x: &Clustered, y: &Clustered, diam2: f64, settings: &SinkhornSettings) -> Dual {
+    if settings.exact_prices {
+        // Start the final-ε iterations from the optimal assignment's dual potentials.
+        let ex = crate::exact::solve_sorted(x, y, diam2, &crate::ExactSettings::default());
+        let guards = Guards::of_exact(&ex.stats);
+        let mut phases = ex.stats.phases;
+        let mut dual = polish(x, y, ex.u, ex.v, settings, ex.stats.pair_evaluations, 0);
+        dual.guards = guards;
+        phases.merge(&dual.phases);
+        dual.phases = phases;
+        dual
+    } else {
+        solve_dual(x, y, diam2, settings)
+    }
 }
 
 /// The spread check of an entropic solve: [`OtError::SpreadTooLarge`] when the
@@ -382,8 +434,24 @@ pub fn solve(
     target: &PointCloud,
     settings: &SinkhornSettings,
 ) -> Result<OtResult, OtError> {
+    solve_from(source, target, settings, None)
+}
+
+/// [`solve`] started from the potentials the previous solve left in `state`
+/// (see `crate::warm`): each entropic problem runs only the polish from them.
+/// The state is replaced by this solve's, or emptied when it fails (`None`:
+/// a cold solve that keeps nothing); a state from clouds of another size (or
+/// without the self-transport potentials `debias` needs) starts cold.
+pub(crate) fn solve_from(
+    source: &PointCloud,
+    target: &PointCloud,
+    settings: &SinkhornSettings,
+    mut state: Option<&mut Option<SinkhornState>>,
+) -> Result<OtResult, OtError> {
+    let previous = state.as_mut().and_then(|s| s.take());
     settings.validate()?;
-    check_pair(source, target)?;
+    let n = check_pair(source, target)?;
+    let previous = previous.filter(|p| p.fits(n, settings.debias));
     // The gradient includes the distance between the clouds: the exact matcher's bound.
     check_spread(
         "sinkhorn",
@@ -402,7 +470,16 @@ pub fn solve(
             Clustered::new(target, settings.cluster_size),
         )
     });
-    let xy = solve_one(&x, &y, diam2, settings)?;
+    let start = |a: &Clustered, b: &Clustered, p: &Potentials| Potentials {
+        f: a.sorted(&p.f),
+        g: b.sorted(&p.g),
+    };
+    let plan_start = previous.as_ref().map(|p| {
+        let mut kept = p.plan.clone();
+        centred.centre_potentials(&mut kept.f, &mut kept.g);
+        start(&x, &y, &kept)
+    });
+    let xy = solve_one(&x, &y, diam2, settings, plan_start)?;
     phases.merge(&xy.dual.phases);
     let bary = x.unsort(&xy.barycentres);
     let mut stats = SolveStats {
@@ -410,9 +487,13 @@ pub fn solve(
         ..SolveStats::default()
     };
     tally(&xy, settings, &mut stats);
+    let mut selves = None;
     let (loss, pull) = if settings.debias {
-        let xx = solve_one(&x, &x, diameter_sq(source, source), settings)?;
-        let yy = solve_one(&y, &y, diameter_sq(target, target), settings)?;
+        let kept = previous.as_ref().and_then(|p| p.selves.as_ref());
+        let xx_start = kept.map(|[s, _]| start(&x, &x, s));
+        let yy_start = kept.map(|[_, t]| start(&y, &y, t));
+        let xx = solve_one(&x, &x, diameter_sq(source, source), settings, xx_start)?;
+        let yy = solve_one(&y, &y, diameter_sq(target, target), settings, yy_start)?;
         tally(&xx, settings, &mut stats);
         tally(&yy, settings, &mut stats);
         phases.merge(&xx.dual.phases);
@@ -423,6 +504,11 @@ pub fn solve(
             .zip(bary.iter().zip(&self_bary))
             .map(|(p, (t_xy, t_xx))| std::array::from_fn(|d| p[d] - t_xx[d] + t_xy[d]))
             .collect();
+        let unsorted = |a: &Clustered, s: &Solved| Potentials {
+            f: a.unsort(&s.dual.f),
+            g: a.unsort(&s.dual.g),
+        };
+        selves = Some([unsorted(&x, &xx), unsorted(&y, &yy)]);
         (xy.value - 0.5 * (xx.value + yy.value), pull)
     } else {
         (xy.value, bary.clone())
@@ -440,6 +526,15 @@ pub fn solve(
     stats.phases = phases;
     let gradient = centred.gradient(&pull);
     check_finite(loss, &plan, &gradient)?;
+    if let Some(state) = state {
+        *state = Some(SinkhornState {
+            plan: Potentials {
+                f: plan.f.clone(),
+                g: plan.g.clone(),
+            },
+            selves,
+        });
+    }
     Ok(OtResult {
         loss,
         gradient,
@@ -454,6 +549,7 @@ fn tally(solved: &Solved, settings: &SinkhornSettings, stats: &mut SolveStats) {
     let dual = &solved.dual;
     stats.iterations += dual.iterations;
     stats.pair_evaluations += solved.pairs;
+    stats.warm_starts += usize::from(solved.warm);
     dual.guards.add_to(stats);
     stats.unconverged_solves +=
         usize::from(!converged(dual.marginal_error, settings.marginal_tolerance));

@@ -30,14 +30,20 @@
 //! (truncated updates at the remaining scales), `polish` (final-ε updates to
 //! the marginal tolerance), `barycentres`; exact: `warm_start` (the entropic
 //! solve), `candidates` (the sparse graph), `auction`, `augment` (shortest
-//! augmenting paths), `check` (optimality checks over all pairs).
+//! augmenting paths), `check` (optimality checks over all pairs), `warm_keep`
+//! (what a solve keeps for a warm start, see `epsm_ot::MatchState`).
 //!
 //! ```text
 //! epsm bench ot --n 4096 --solver exact --json
 //! ```
+//!
+//! With `--sequence K` it instead times cold against warm-started solves
+//! along a rendered sequence ([`sequence`]).
 
 use std::collections::BTreeMap;
 use std::time::Instant;
+
+mod sequence;
 
 use anyhow::{Context, bail};
 use epsm_ot::{Matcher, Matching, SinkhornSettings, synthetic};
@@ -75,6 +81,9 @@ pub struct OtBenchArgs {
     /// Sinkhorn ratio between successive blurs of the ε-scaling schedule.
     #[arg(long, default_value_t = 0.9)]
     pub scaling: f64,
+    /// Cold against warm-started matching along a rendered sequence (see `bench_ot::sequence`).
+    #[command(flatten)]
+    pub sequence: sequence::SequenceArgs,
 }
 
 /// One benchmark measurement, as printed with `--json`.
@@ -107,8 +116,6 @@ pub fn run(args: &OtBenchArgs) -> anyhow::Result<()> {
     if !(1..=MAX_POINTS).contains(&args.n) {
         bail!("--n must be in [1, {MAX_POINTS}], got {}", args.n);
     }
-    let (source, target) =
-        synthetic::blobs_pair(args.n, args.seed).context("generating the blobs pair")?;
     let matcher = match args.solver {
         OtSolver::Exact => Matcher::exact(),
         OtSolver::Sinkhorn => Matcher::Sinkhorn(SinkhornSettings {
@@ -118,6 +125,11 @@ pub fn run(args: &OtBenchArgs) -> anyhow::Result<()> {
         }),
         OtSolver::Sliced => Matcher::sliced(),
     };
+    if let Some(steps) = args.sequence.sequence {
+        return sequence::run(&args.sequence, steps, args.n, &matcher, args.json);
+    }
+    let (source, target) =
+        synthetic::blobs_pair(args.n, args.seed).context("generating the blobs pair")?;
     let start = Instant::now();
     let result = matcher
         .solve(&source, &target)

@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use epsm_ot::MIN_BLUR;
+use epsm_ot::{MIN_BLUR, MatchLimits};
 use epsm_render::Scene;
 use epsm_render::scene::load::{Ctx, Locator, load_parts, parts_from_desc};
 
@@ -147,6 +147,12 @@ pub(super) fn problem(d: &ProblemDesc, file: &Path, locator: &Locator) -> OptRes
     let [mw, mh] = l.match_resolution;
     c.count("loss.match_resolution", mw.min(mh), 4, 512)?;
     c.count("loss.match_resolution", mw.max(mh), 4, 512)?;
+    if let Some(matcher) = kind.matcher() {
+        let n = mw as usize * mh as usize;
+        matcher
+            .check_size(n, &MatchLimits::default())
+            .map_err(|e| c.err("loss.match_resolution", e.to_string()))?;
+    }
     let o = &d.optimizer;
     let method = Method::parse(&o.method).ok_or_else(|| {
         c.err(

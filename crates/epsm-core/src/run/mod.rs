@@ -30,8 +30,10 @@
 mod checkpoint;
 mod error;
 
+use std::sync::{Mutex, PoisonError};
 use std::time::Instant;
 
+use epsm_ot::MatchState;
 use epsm_render::record::PathRecord;
 use epsm_render::tracer::{RenderOptions, render, render_recorded};
 use epsm_render::{Image, Scene};
@@ -108,6 +110,9 @@ pub struct Optimization {
     wall_before: f64,
     started: Instant,
     rows: Vec<Row>,
+    /// What the last exact match left for the next ([`MatchState`]; a
+    /// resumed run starts without it, which changes its matchings only among ties).
+    warm: Mutex<MatchState>,
 }
 
 impl Optimization {
@@ -176,6 +181,7 @@ impl Optimization {
             wall_before: 0.0,
             started: Instant::now(),
             rows: Vec::new(),
+            warm: Mutex::default(),
         })
     }
 
@@ -274,7 +280,14 @@ impl Optimization {
         };
         let t1 = Instant::now();
         let kind = self.schedule.loss_at(self.iteration);
-        let mut loss = evaluate(kind, &image, &self.target_match, self.problem.loss.lambda)?;
+        let warm = &mut *self.warm.lock().unwrap_or_else(PoisonError::into_inner);
+        let mut loss = evaluate(
+            kind,
+            &image,
+            &self.target_match,
+            self.problem.loss.lambda,
+            Some(warm),
+        )?;
         if self.problem.loss.flow && kind.is_ot() {
             add_flow(&image, &mut loss)?;
         }

@@ -90,6 +90,11 @@ impl SparseAssignment {
         (self.edges, self.v)
     }
 
+    /// The candidate edges and both potentials (the matching is [`Self::permutation`]).
+    pub fn into_potentials(self) -> (Vec<Vec<(u32, f64)>>, Vec<f64>, Vec<f64>) {
+        (self.edges, self.u, self.v)
+    }
+
     /// Number of candidate edges.
     pub fn edge_count(&self) -> usize {
         self.edges.iter().map(Vec::len).sum()

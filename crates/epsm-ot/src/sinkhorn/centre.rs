@@ -66,19 +66,28 @@ impl Centred {
     /// The plan of the centred clouds made the plan of the original ones
     /// (potentials, barycentres and transport cost; see the module doc).
     pub fn restore_plan(&self, plan: &mut EntropicPlan) {
-        let shift_sq: f64 = self.shift.iter().map(|s| s * s).sum();
-        plan.f
-            .iter_mut()
-            .zip(self.source.points())
-            .for_each(|(f, p)| *f += along(&self.shift, p) + shift_sq);
-        plan.g
-            .iter_mut()
-            .zip(self.target.points())
-            .for_each(|(g, q)| *g -= along(&self.shift, q));
+        self.move_potentials(&mut plan.f, &mut plan.g, 1.0);
         for t in &mut plan.barycentres {
             *t = std::array::from_fn(|k| (f64::from(t[k]) + self.target_origin[k]) as f32);
         }
         plan.transport_cost += self.value_shift;
+    }
+
+    /// Potentials `f, g` of the original clouds (input order) made those of the
+    /// centred ones: the inverse of [`Self::restore_plan`]'s (used to warm-start a solve).
+    pub fn centre_potentials(&self, f: &mut [f64], g: &mut [f64]) {
+        self.move_potentials(f, g, -1.0);
+    }
+
+    /// `f += sign (2⟨x'_i, d⟩ + ‖d‖²)`, `g −= sign 2⟨y'_j, d⟩` (see the module doc).
+    fn move_potentials(&self, f: &mut [f64], g: &mut [f64], sign: f64) {
+        let shift_sq: f64 = self.shift.iter().map(|s| s * s).sum();
+        f.iter_mut()
+            .zip(self.source.points())
+            .for_each(|(f, p)| *f += sign * (along(&self.shift, p) + shift_sq));
+        g.iter_mut()
+            .zip(self.target.points())
+            .for_each(|(g, q)| *g -= sign * along(&self.shift, q));
     }
 
     /// The gradient `2 (P'_i − T'_i) / n` of the centred clouds plus `2d/n`, from

@@ -3,6 +3,7 @@
 mod edge_cases;
 mod exact_oracle;
 mod sinkhorn_props;
+mod warm;
 
 use crate::points::{Point, PointCloud};
 use crate::synthetic::Rng;
