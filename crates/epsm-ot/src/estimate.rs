@@ -114,8 +114,9 @@ mod tests {
         assert!(seconds > 60.0 && max_seconds == 120.0);
         let text = exact
             .check_size(512 * 512, &limits)
-            .unwrap_err()
-            .to_string();
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default();
         assert!(text.contains("262144") && text.contains("120"), "{text}");
         // The estimates grow with n, and memory alone can refuse.
         let tight = MatchLimits {

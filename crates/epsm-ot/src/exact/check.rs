@@ -232,7 +232,7 @@ mod tests {
             let v: Vec<f64> = cj
                 .range
                 .clone()
-                .map(|j| 0.3 * f64::from(rng.uniform()) - u + 1e-9 * f64::from(rng.uniform() - 0.5))
+                .map(|_| 0.3 * f64::from(rng.uniform()) - u + 1e-9 * f64::from(rng.uniform() - 0.5))
                 .collect();
             let max_v = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
             let box_sq = cj.box_dist_sq(&p);

@@ -14,6 +14,9 @@ use std::collections::BinaryHeap;
 
 const NONE: u32 = u32::MAX;
 
+/// Candidate edges per row: (column, cost).
+pub(crate) type Edges = Vec<Vec<(u32, f64)>>;
+
 /// A heap entry ordered by smallest distance first, ties by column.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Entry {
@@ -91,7 +94,7 @@ impl SparseAssignment {
     }
 
     /// The candidate edges and both potentials (the matching is [`Self::permutation`]).
-    pub fn into_potentials(self) -> (Vec<Vec<(u32, f64)>>, Vec<f64>, Vec<f64>) {
+    pub fn into_potentials(self) -> (Edges, Vec<f64>, Vec<f64>) {
         (self.edges, self.u, self.v)
     }
 
