@@ -190,7 +190,11 @@ mod tests {
         };
         let text = csv(&keys, &[row]);
         let lines: Vec<&str> = text.lines().collect();
-        assert!(lines[0].starts_with("iteration,wall_s,loss,image_rmse,param_error,a.translate.x"));
+        assert!(
+            lines[0].starts_with(
+                "iteration,wall_s,loss,image_rmse,param_error,judged_loss,a.translate.x"
+            )
+        );
         assert_eq!(lines[0].split(',').count(), lines[1].split(',').count());
         let cell = |name: &str| {
             let column = lines[0].split(',').position(|c| c == name);

@@ -4,7 +4,7 @@
 //!
 //! | key | automatic rule |
 //! |---|---|
-//! | `parameters[i].lr` | [`STEP_FRACTION`] of the bound width; unbounded: that fraction of the scene's bounding-box diagonal for positions, [`STEP_DEGREES`] for angles, of the key's range for materials |
+//! | `parameters[i].lr` | [`CROSSING`] × scale / iterations; the scale is the bound width, else a quarter of the scene's bounding-box diagonal for positions, [`ANGLE_SCALE`] for angles, the key's range for albedo and alpha, the value's magnitude (at least 1) for other factors |
 //! | `optimizer.decay` | `(1/`[`FINAL_LR_DIVISOR`]`)^(1/iterations)`: the last step is 1/20 of the first |
 //! | `optimizer.beta1` | [`BETA1`] (a constant measured over the shipped problems) |
 //! | `loss.flow` | on when a camera parameter is optimized |
@@ -21,12 +21,19 @@ use crate::params::Target;
 /// its place at full speed overshoots it and may stop at a bound.
 pub const BETA1: f64 = 0.5;
 
-/// The first step of a parameter as a fraction of its scale (bound width,
-/// scene diagonal or key range).
-pub const STEP_FRACTION: f64 = 1.0 / 25.0;
+/// The first learning rate of a parameter is `CROSSING × scale /
+/// iterations`: with the decay to `1 / FINAL_LR_DIVISOR`, the steps of the
+/// first third of the run add up to about 0.6 × scale and those of the
+/// whole run to about 0.95 × scale (Adam's step is about the learning rate
+/// while the gradient's sign holds).
+pub const CROSSING: f64 = 3.0;
 
-/// The first step of an unbounded angle (degrees).
-pub const STEP_DEGREES: f64 = 2.0;
+/// The scale of an unbounded angle (degrees).
+pub const ANGLE_SCALE: f64 = 60.0;
+
+/// The scale of an unbounded position as a fraction of the scene's
+/// bounding-box diagonal.
+pub const POSITION_SCALE: f64 = 0.25;
 
 /// The learning rate decays to `1 / FINAL_LR_DIVISOR` of its first value
 /// over the iterations.
@@ -105,56 +112,46 @@ pub fn is_camera(target: &Target) -> bool {
     )
 }
 
-/// The automatic learning rate (user units per step) of a parameter of
-/// `target` with explicit `bounds` (if any), starting at `initial`, in a
-/// scene whose bounding box has diagonal `diagonal` (scene units), and the
-/// rule in words.
-///
-/// Adam's step is about the learning rate whatever the gradient's size, so
-/// the rate is a step length: [`STEP_FRACTION`] of the parameter's scale.
-pub fn step_size(
-    target: &Target,
-    bounds: Option<[f64; 2]>,
-    initial: f64,
-    diagonal: f64,
-) -> (f64, String) {
+/// The scale of a parameter of `target` (user units) with explicit
+/// `bounds` (if any), starting at `initial`, in a scene whose bounding box
+/// has diagonal `diagonal` (scene units), and the rule in words.
+pub fn scale(target: &Target, bounds: Option<[f64; 2]>, initial: f64, diagonal: f64) -> Step {
+    let step = |scale: f64, why: String| Step { scale, why };
     if let Some([lo, hi]) = bounds {
-        let lr = (hi - lo) * STEP_FRACTION;
-        return (
-            lr,
-            format!(
-                "1/{:.0} of the bound width {}",
-                1.0 / STEP_FRACTION,
-                hi - lo
-            ),
-        );
+        return step(hi - lo, format!("the bound width {}", hi - lo));
     }
     let (domain, _) = target.domain();
     match Scale::of(target) {
-        Scale::Position => (
-            diagonal * STEP_FRACTION,
-            format!(
-                "1/{:.0} of the scene's bounding-box diagonal {diagonal:.3}",
-                1.0 / STEP_FRACTION
-            ),
+        Scale::Position => step(
+            diagonal * POSITION_SCALE,
+            format!("a quarter of the scene's bounding-box diagonal {diagonal:.3}"),
         ),
-        Scale::Angle => (STEP_DEGREES, "degrees per step of an angle".into()),
-        Scale::Material if domain[1] <= 1.0 => (
-            (domain[1] - domain[0]) * STEP_FRACTION,
-            format!(
-                "1/{:.0} of the key's range [{}, {}]",
-                1.0 / STEP_FRACTION,
-                domain[0],
-                domain[1]
-            ),
+        Scale::Angle => step(ANGLE_SCALE, "the scale of an unbounded angle".into()),
+        Scale::Material if domain[1] <= 1.0 => step(
+            domain[1] - domain[0],
+            format!("the key's range [{}, {}]", domain[0], domain[1]),
         ),
-        Scale::Material => (
-            initial.abs().max(1.0) * STEP_FRACTION,
-            format!(
-                "1/{:.0} of the value's magnitude (at least 1)",
-                1.0 / STEP_FRACTION
-            ),
+        Scale::Material => step(
+            initial.abs().max(1.0),
+            "the value's magnitude (at least 1)".into(),
         ),
+    }
+}
+
+/// The scale a parameter's automatic learning rate follows.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Step {
+    /// The scale, in the parameter's units.
+    pub scale: f64,
+    /// Where it comes from.
+    pub why: String,
+}
+
+impl Step {
+    /// The first learning rate (user units per step) of a run of
+    /// `iterations`: [`CROSSING`] × scale / iterations.
+    pub fn lr(&self, iterations: u32) -> f64 {
+        CROSSING * self.scale / f64::from(iterations.max(1))
     }
 }
 
@@ -178,11 +175,16 @@ mod tests {
     #[test]
     fn step_sizes_follow_bounds_then_the_kind_of_quantity() {
         let yaw = Target::CameraYaw;
-        let (lr, why) = step_size(&yaw, Some([-20.0, 30.0]), 0.0, 5.0);
-        assert!((lr - 50.0 * STEP_FRACTION).abs() < 1e-12 && why.contains("bound"));
-        assert_eq!(step_size(&yaw, None, 0.0, 5.0).0, STEP_DEGREES);
+        let bounded = scale(&yaw, Some([-20.0, 30.0]), 0.0, 5.0);
+        assert!(bounded.scale == 50.0 && bounded.why.contains("bound"));
+        assert!((bounded.lr(40) - CROSSING * 50.0 / 40.0).abs() < 1e-12);
+        assert_eq!(scale(&yaw, None, 0.0, 5.0).scale, ANGLE_SCALE);
         let cam = Target::CameraTranslate { axis: 0 };
-        assert!((step_size(&cam, None, 0.0, 5.0).0 - 5.0 * STEP_FRACTION).abs() < 1e-12);
+        assert_eq!(scale(&cam, None, 0.0, 8.0).scale, 8.0 * POSITION_SCALE);
         assert!(is_camera(&cam) && is_camera(&yaw) && is_geometric(&cam));
+        // The steps of the first third cross about 0.6 of the scale.
+        let (n, d) = (60, decay(60));
+        let third: f64 = (0..n / 3).map(|i| bounded.lr(n) * d.powi(i as i32)).sum();
+        assert!((third / bounded.scale - 0.6).abs() < 0.1, "{third}");
     }
 }

@@ -30,7 +30,6 @@ use epsm_render::scene::SceneParts;
 use crate::loss::LossKind;
 use crate::run::OptResult;
 use crate::schedule::Method;
-pub use auto::Choice;
 pub use desc::ProblemDesc;
 
 /// One optimized parameter.
@@ -44,8 +43,11 @@ pub struct ParamSpec {
     pub true_value: Option<f64>,
     /// `[lo, hi]` (`±f64::MAX` when unbounded).
     pub bounds: [f64; 2],
-    /// Learning rate (user units per step).
+    /// Learning rate (user units per step); with `step`, the value for the
+    /// problem file's iteration count, set again for the run's.
     pub lr: f64,
+    /// The scale of an automatic learning rate (`None`: `lr` was given).
+    pub step: Option<auto::Step>,
 }
 
 impl ParamSpec {
@@ -57,6 +59,7 @@ impl ParamSpec {
             true_value: None,
             bounds: [-f64::MAX, f64::MAX],
             lr,
+            step: None,
         }
     }
 
@@ -188,10 +191,6 @@ pub struct Problem {
     pub checkpoint_every: u32,
     /// The parameter error at or below which the problem counts as solved.
     pub tolerance: Option<f64>,
-    /// The automatic choices made when loading (the step sizes of
-    /// parameters without `lr`); the run adds its own
-    /// ([`crate::Optimization::choices`]).
-    pub choices: Vec<Choice>,
 }
 
 impl Problem {
@@ -237,7 +236,6 @@ impl Problem {
             out_dir: PathBuf::from(output.dir),
             checkpoint_every: output.checkpoint_every,
             tolerance: None,
-            choices: Vec::new(),
         }
     }
 }

@@ -7,7 +7,7 @@ use epsm_ot::MIN_BLUR;
 use epsm_render::Scene;
 use epsm_render::scene::load::{Ctx, Locator, load_parts, parts_from_desc};
 
-use super::auto::{Choice, step_size};
+use super::auto::scale;
 use super::desc::ProblemDesc;
 use super::{LossSettings, OptimizerSettings, ParamSpec, Passes, Problem, Target};
 use crate::loss::LossKind;
@@ -47,7 +47,6 @@ pub(super) fn problem(d: &ProblemDesc, file: &Path, locator: &Locator) -> OptRes
         .accel()
         .world_bounds()
         .map_or(1.0, |(lo, hi)| (hi - lo).length());
-    let mut choices = Vec::new();
     let mut params = Vec::with_capacity(d.parameters.len());
     for (i, p) in d.parameters.iter().enumerate() {
         let f = |name: &str| format!("parameters[{i}].{name}");
@@ -94,18 +93,17 @@ pub(super) fn problem(d: &ProblemDesc, file: &Path, locator: &Locator) -> OptRes
             p.lr.map(|v| c.check(&f("lr"), v, v > 0.0, "a positive number"))
                 .transpose()?
                 .or(lr);
-        let lr = match explicit {
-            Some(lr) => lr,
-            None => {
-                let start = initial.unwrap_or(param.value);
-                let (lr, why) = step_size(&param.target, p.bounds, start, diagonal);
-                choices.push(Choice::new(
-                    f("lr"),
-                    format!("{lr:.4}"),
-                    format!("{}: {why}", p.key),
-                ));
-                lr
-            }
+        let step = explicit.is_none().then(|| {
+            scale(
+                &param.target,
+                p.bounds,
+                initial.unwrap_or(param.value),
+                diagonal,
+            )
+        });
+        let lr = match &step {
+            Some(step) => step.lr(d.optimizer.iterations),
+            None => explicit.unwrap_or_default(),
         };
         params.push(ParamSpec {
             key: p.key.clone(),
@@ -113,6 +111,7 @@ pub(super) fn problem(d: &ProblemDesc, file: &Path, locator: &Locator) -> OptRes
             true_value,
             bounds,
             lr,
+            step,
         });
     }
     let target = match &d.target.image {
@@ -236,6 +235,5 @@ pub(super) fn problem(d: &ProblemDesc, file: &Path, locator: &Locator) -> OptRes
         out_dir: d.output.dir.clone().into(),
         checkpoint_every: d.output.checkpoint_every,
         tolerance,
-        choices,
     })
 }

@@ -178,7 +178,7 @@ impl Optimization {
         let target_match = resample(&target, mw, mh);
         primal.set(&theta);
         grad.set(&theta);
-        let mut choices = problem.choices.clone();
+        let mut choices = Vec::new();
         let (schedule, judge) = choose(&mut problem, &grad, &target_match, &mut choices);
         let o = &problem.optimizer;
         let adam = Adam::new(AdamSettings {
@@ -433,8 +433,9 @@ impl Optimization {
 }
 
 /// Makes the run's automatic choices for `problem` (resolving its
-/// `None` settings in place, recording each in `choices`): the colour-flow
-/// term, the decay, the matched render's samples and the hybrid switch.
+/// `None` settings in place, recording each in `choices`): the step sizes,
+/// the colour-flow term, the decay, the matched render's samples and the
+/// hybrid switch.
 /// Returns the schedule and the judge of θ.
 fn choose(
     problem: &mut Problem,
@@ -444,6 +445,23 @@ fn choose(
 ) -> (Schedule, Judge) {
     let targets: Vec<_> = grad.table.params().iter().map(|p| p.target).collect();
     let n = problem.optimizer.iterations;
+    for (i, p) in problem.params.iter_mut().enumerate() {
+        if let Some(step) = &p.step {
+            p.lr = step.lr(n);
+            let why = format!(
+                "{}: {} x scale / {n} iterations, scale {} ({})",
+                p.key,
+                auto::CROSSING,
+                step.scale,
+                step.why
+            );
+            choices.push(Choice::new(
+                format!("parameters[{i}].lr"),
+                format!("{:.4}", p.lr),
+                why,
+            ));
+        }
+    }
     if problem.loss.flow.is_none() {
         let camera = targets.iter().any(is_camera);
         let why = if camera {
@@ -464,6 +482,12 @@ fn choose(
         choices.push(Choice::new("optimizer.decay", format!("{d:.4}"), why));
     }
     let spp_grad = problem.passes.spp_grad;
+    if problem.passes.spp_match.is_none() && problem.loss.flow == Some(true) {
+        problem.passes.spp_match = Some(0);
+        let why = "the colour-flow term turns the matching's colour residual into the camera's \
+                   gradient, and a clean matched image leaves almost none: the gradient pass's image";
+        choices.push(Choice::new("render.spp_match", "0", why));
+    }
     if problem.passes.spp_match.is_none() {
         let seed = problem.optimizer.seed;
         let seeds = [stream_seed(seed, 0, 0xA1), stream_seed(seed, 0, 0xA2)];
