@@ -70,8 +70,8 @@ pub struct Plateau {
     pub seen: u32,
     /// The moving average (`None` before the first observation).
     pub average: Option<f64>,
-    /// Its lowest value so far.
-    pub best: f64,
+    /// Its lowest value so far (`None` before the first observation).
+    pub best: Option<f64>,
     /// The observation (0-based) that set `best`.
     pub best_at: u32,
 }
@@ -88,7 +88,7 @@ impl Plateau {
             window: window.max(1),
             seen: 0,
             average: None,
-            best: f64::INFINITY,
+            best: None,
             best_at: 0,
         }
     }
@@ -100,8 +100,8 @@ impl Plateau {
             Self::SMOOTHING * value + (1.0 - Self::SMOOTHING) * a
         });
         self.average = Some(a);
-        if a < self.best * (1.0 - Self::MIN_GAIN) || self.best.is_infinite() {
-            self.best = a;
+        if self.best.is_none_or(|b| a < b * (1.0 - Self::MIN_GAIN)) {
+            self.best = Some(a);
             self.best_at = self.seen;
         }
         self.seen += 1;
