@@ -1,6 +1,8 @@
 //! Run reports (docs/design.md §8): one row per iteration, written as `run.csv`.
 //!
-//! Columns: `iteration,wall_s,loss,image_rmse,param_error`, then one column
+//! Columns: `iteration,wall_s,loss,image_rmse,param_error,judged_loss`
+//! (`judged_loss`: the loss of θ on the independent judged render,
+//! [`crate::run::best`], empty in iterations not judged), then one column
 //! per parameter (its value, in user units, headed by its key), then
 //! `paths_traced,paths_solved,paths_skipped`, one `dropped_<reason>` column
 //! per [`DropReason`], the matcher's guard counts
@@ -46,6 +48,10 @@ pub struct Row {
     pub image_rmse: f64,
     /// RMS of `θ − θ_true`, when true values are known.
     pub param_error: Option<f64>,
+    /// The loss of θ on the independent judged render, in the iterations
+    /// that judge θ ([`crate::run::best`]).
+    #[serde(default)]
+    pub judged_loss: Option<f64>,
     /// θ.
     pub theta: Vec<f64>,
     /// Paths traced, solved, skipped.
@@ -64,7 +70,7 @@ pub struct Row {
 
 /// The CSV header for parameters `keys`.
 pub fn header(keys: &[String]) -> String {
-    let mut h = String::from("iteration,wall_s,loss,image_rmse,param_error");
+    let mut h = String::from("iteration,wall_s,loss,image_rmse,param_error,judged_loss");
     for k in keys {
         let _ = write!(h, ",{k}");
     }
@@ -81,15 +87,15 @@ pub fn header(keys: &[String]) -> String {
 
 /// One CSV line (no newline).
 pub fn csv_line(row: &Row) -> String {
+    let number = |x: Option<f64>| x.map(|e| format!("{e:e}")).unwrap_or_default();
     let mut s = format!(
-        "{},{:.3},{:e},{:e},{}",
+        "{},{:.3},{:e},{:e},{},{}",
         row.iteration,
         row.wall_s,
         row.loss,
         row.image_rmse,
-        row.param_error
-            .map(|e| format!("{e:e}"))
-            .unwrap_or_default()
+        number(row.param_error),
+        number(row.judged_loss)
     );
     for v in &row.theta {
         let _ = write!(s, ",{v}");
@@ -170,6 +176,7 @@ mod tests {
             loss: 0.25,
             image_rmse: 0.1,
             param_error: param_error(&[1.0, 2.0], &[Some(0.0), Some(2.0)]),
+            judged_loss: Some(0.125),
             theta: vec![1.0, 2.0],
             paths: [10, 5, 2],
             dropped: vec![0; DropReason::ALL.len()],
@@ -183,7 +190,11 @@ mod tests {
         };
         let text = csv(&keys, &[row]);
         let lines: Vec<&str> = text.lines().collect();
-        assert!(lines[0].starts_with("iteration,wall_s,loss,image_rmse,param_error,a.translate.x"));
+        assert!(
+            lines[0].starts_with(
+                "iteration,wall_s,loss,image_rmse,param_error,judged_loss,a.translate.x"
+            )
+        );
         assert_eq!(lines[0].split(',').count(), lines[1].split(',').count());
         let cell = |name: &str| {
             let column = lines[0].split(',').position(|c| c == name);
@@ -193,6 +204,7 @@ mod tests {
         assert_eq!(cell("ot_auction_budget_stops"), Some("0"));
         assert_eq!(cell("ot_clamped_corrections"), Some("7"));
         assert_eq!(cell("path_kinds"), Some("primary"));
+        assert_eq!(cell("judged_loss"), Some("1.25e-1"));
         let err: f64 = lines[1]
             .split(',')
             .nth(4)
@@ -220,6 +232,7 @@ mod tests {
             loss: 0.0,
             image_rmse: 0.0,
             param_error: None,
+            judged_loss: None,
             theta: Vec::new(),
             paths: [0; 3],
             dropped: Vec::new(),

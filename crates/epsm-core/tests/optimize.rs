@@ -59,9 +59,11 @@ fn epsm_reduces_the_parameter_error_at_least_threefold() {
     let last = opt.theta()[0].abs();
     assert!((first - 0.7).abs() < 1e-12);
     assert!(last < first / 3.0, "error {first} -> {last}");
+    let ot = opt.switch() as usize;
+    assert!(ot > 0, "the OT phase ran");
     assert!(
-        opt.rows().iter().all(|r| r.paths[1] > 0),
-        "every iteration solved paths"
+        opt.rows()[..ot].iter().all(|r| r.paths[1] > 0),
+        "every OT iteration solved paths"
     );
 }
 
@@ -112,7 +114,7 @@ fn spp_match_gives_the_loss_its_own_render() {
     // With `spp_match` the OT loss compares an independent render: the loss
     // no longer depends on the gradient pass's sample count, the gradient
     // (its differentiated paths) still does. Without it the loss is the
-    // gradient pass's own image.
+    // gradient pass's own image (`spp_match = 0`).
     let eval = |spp_grad: u32, spp_match: Option<u32>| {
         let mut p = tiny(TRANSLATE);
         p.passes.spp_grad = spp_grad;
@@ -125,7 +127,7 @@ fn spp_match_gives_the_loss_its_own_render() {
     let (a, b) = (eval(2, Some(8)), eval(4, Some(8)));
     assert_eq!(a.0, b.0, "the loss follows the matched render only");
     assert_ne!(a.1, b.1, "the gradient follows the recorded paths");
-    let (c, d) = (eval(2, None), eval(4, None));
+    let (c, d) = (eval(2, Some(0)), eval(4, Some(0)));
     assert_ne!(c.0, d.0, "without spp_match the loss is the pass's image");
     assert!(a.1 > 0.0 && b.1 > 0.0, "{a:?} {b:?}");
 }
@@ -153,6 +155,83 @@ fn a_resumed_run_follows_the_uninterrupted_trajectory() {
     let thetas = |o: &Optimization| o.rows().iter().map(|r| r.theta.clone()).collect::<Vec<_>>();
     assert_eq!(thetas(&whole), thetas(&resumed));
     assert_eq!(whole.theta(), resumed.theta());
+    assert_eq!(
+        (whole.best(), whole.switch()),
+        (resumed.best(), resumed.switch())
+    );
+    assert!(whole.best().is_some() && whole.switch() <= 3);
+}
+
+/// A problem without tuning keys: every automatic choice is made, printed
+/// with its reason, and the run recovers the parameter.
+#[test]
+fn a_problem_without_tuning_keys_gets_every_automatic_choice() {
+    let text = format!(
+        "{}\n{TRANSLATE}",
+        r#"
+scene_file = "../../tests/data/tiny-box.toml"
+tolerance = 0.1
+[target]
+spp = 16
+[loss]
+match_resolution = [32, 32]
+[optimizer]
+iterations = 12
+"#
+    );
+    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("tiny.toml");
+    let p = problem_from_str(&text, &file).expect("loads");
+    assert_eq!(p.tolerance, Some(0.1));
+    // Bounds [-1, 1]: the first step is 3 × their width / 12 iterations.
+    assert!((p.params[0].lr - 3.0 * 2.0 / 12.0).abs() < 1e-12);
+    let mut opt = Optimization::new(p).expect("setup");
+    let keys: Vec<&str> = opt.choices().iter().map(|c| c.key.as_str()).collect();
+    for key in [
+        "parameters[0].lr",
+        "loss.flow",
+        "optimizer.decay",
+        "render.spp_match",
+        "optimizer.l2_fraction",
+        "best",
+    ] {
+        assert!(keys.contains(&key), "{key} missing from {keys:?}");
+    }
+    assert!(opt.choices().iter().all(|c| !c.why.is_empty()));
+    let decay = opt.problem().optimizer.decay.expect("resolved");
+    assert!((decay.powi(12) - 0.05).abs() < 1e-9);
+    while !opt.is_done() {
+        opt.step().expect("iteration");
+    }
+    let best = opt.best().expect("judged");
+    assert!(best.theta[0].abs() < 0.7 / 3.0, "best {best:?}");
+    assert!(opt.rows().iter().any(|r| r.judged_loss.is_some()));
+}
+
+/// With `optimizer.stop` an L2 run whose judged loss stops improving ends
+/// before its iteration count.
+#[test]
+fn stop_ends_a_run_whose_judged_loss_no_longer_improves() {
+    let albedo = r#"
+[[parameters]]
+key = "box.albedo.r"
+initial = 0.8
+true = 0.8
+"#;
+    let mut p = tiny(albedo);
+    p.optimizer.method = epsm_core::Method::L2;
+    p.optimizer.iterations = 60;
+    p.optimizer.stop = true;
+    let mut opt = Optimization::new(p.clone()).expect("setup");
+    while !opt.is_done() {
+        opt.step().expect("iteration");
+    }
+    assert!(opt.iteration() < 60, "ran {} iterations", opt.iteration());
+    p.optimizer.stop = false;
+    let mut full = Optimization::new(p).expect("setup");
+    for _ in 0..opt.iteration() {
+        full.step().expect("iteration");
+    }
+    assert!(!full.is_done(), "without stop the run goes on");
 }
 
 #[test]

@@ -3,7 +3,9 @@
 //! wall-clock seconds), and draw their error-versus-time curves in one
 //! plot (`compare.png`, with the target, the initial render and each
 //! method's final render below) with `compare.csv` beside it; each method's own run
-//! folder (`<out>/<method>/`) holds its full report.
+//! folder (`<out>/<method>/`) holds its full report. Each method's row gives
+//! the seed, the parameter error of its best θ and of its last, the
+//! problem's tolerance and whether it is solved.
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -11,7 +13,9 @@ use std::path::PathBuf;
 use epsm_core::load_problem;
 use epsm_core::report::write_atomic;
 
-use super::optimize::{Summary, apply_overrides, optimize, panels, problem_name, start_images};
+use super::optimize::{
+    Summary, apply_overrides, optimize, panels, problem_name, solved_word, start_images,
+};
 use super::plots::{Figure, Thumb, plot_figure};
 
 /// Arguments of `epsm compare`.
@@ -78,26 +82,31 @@ pub fn run(args: &CompareArgs) -> anyhow::Result<()> {
         runs.push((method.clone(), s));
     }
     let mut csv = String::from(
-        "problem,method,param_error,image_rmse,iterations,wall_s,primal_s,trace_s,matching_s,solve_s\n",
+        "problem,method,seed,param_error,last_param_error,tolerance,solved,image_rmse,iterations,wall_s,primal_s,trace_s,matching_s,solve_s\n",
     );
     let mut md = String::new();
+    let seed = args.seed.unwrap_or(base.optimizer.seed);
     for (m, s) in &runs {
-        let pe = s.param_error.map(|e| format!("{e:.5}")).unwrap_or_default();
+        let number = |x: Option<f64>| x.map(|e| format!("{e:.5}")).unwrap_or_default();
+        let pe = number(s.param_error);
+        let (last, tol) = (number(s.last_param_error), number(s.tolerance));
+        let solved = solved_word(s.solved);
         let t = &s.per_iteration;
         let parts = [t.primal, t.trace, t.matching, t.solve];
         let _ = writeln!(
             csv,
-            "{name},{m},{pe},{:.5},{},{:.1},{}",
+            "{name},{m},{seed},{pe},{last},{tol},{solved},{:.5},{},{:.1},{}",
             s.image_rmse,
             s.iterations,
             s.wall_s,
             // Microseconds: a tiny problem's iteration can take well under a millisecond.
             parts.map(|x| format!("{x:.6}")).join(",")
         );
-        let pe = if pe.is_empty() { "n/a".into() } else { pe };
+        let na = |x: String| if x.is_empty() { "n/a".into() } else { x };
+        let (pe, last, tol) = (na(pe), na(last), na(tol));
         let _ = writeln!(
             md,
-            "| {name} | {m} | {pe} | {:.5} | {} | {:.1} | {} |",
+            "| {name} | {m} | {seed} | {pe} | {last} | {tol} | {solved} | {:.5} | {} | {:.1} | {} |",
             s.image_rmse,
             s.iterations,
             s.wall_s,

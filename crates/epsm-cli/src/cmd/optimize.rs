@@ -1,11 +1,20 @@
 //! `epsm optimize`: run one optimization problem and write its report.
 //!
 //! Output folder: `run.csv` (one row per iteration, rewritten atomically each
-//! iteration), `target`, `initial` and `final` images (`.png` sRGB and
-//! `.exr` linear), `report.png` (image RMSE and parameter error against
-//! wall-clock seconds, and the target, initial and final images, titled with
-//! the problem and the method), `checkpoint.json` every `output.checkpoint_every`
-//! iterations and at the end (`--resume DIR` continues from it).
+//! iteration), `summary.csv` (one row: the last and the best θ with their
+//! parameter errors, the tolerance and whether the problem is solved),
+//! `target`, `initial` and `final` images (`.png` sRGB and `.exr` linear;
+//! `final` at the best θ), `report.png` (image RMSE and parameter error
+//! against wall-clock seconds, and the target, initial and final images,
+//! titled with the problem and the method), `checkpoint.json` every
+//! `output.checkpoint_every` iterations and at the end (`--resume DIR`
+//! continues from it).
+//!
+//! The run prints every automatic choice on standard error first (`auto
+//! KEY = VALUE (why)`), and at the end one line on standard output: the
+//! iterations, seconds, image RMSE, the parameter error of the best θ, the
+//! last θ's beside it and `solved: yes/no` against the problem's
+//! `tolerance`.
 //!
 //! The first iteration whose entropic OT solves stopped above their marginal
 //! tolerance (`ot_unconverged_solves` in `run.csv`) prints a warning on
@@ -15,6 +24,8 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use epsm_core::loss::LossKind;
+use std::fmt::Write as _;
+
 use epsm_core::report::{Timings, csv, mean_timings, param_error, write_atomic};
 use epsm_core::{Method, Optimization, Problem, load_problem};
 use epsm_render::Image;
@@ -51,9 +62,19 @@ pub struct OptimizeArgs {
 
 /// How a run ended.
 pub struct Summary {
-    /// Parameter error at the final θ (when true values are known).
+    /// Parameter error at the best θ (when true values are known): what
+    /// the run delivers.
     pub param_error: Option<f64>,
-    /// RMSE of the final render against the target.
+    /// Parameter error at the last θ.
+    pub last_param_error: Option<f64>,
+    /// The iteration whose θ was judged best.
+    pub best_iteration: u32,
+    /// The problem's tolerance on the parameter error.
+    pub tolerance: Option<f64>,
+    /// Whether the best θ's parameter error is within the tolerance (when
+    /// both are known).
+    pub solved: Option<bool>,
+    /// RMSE of the final render (best θ) against the target.
     pub image_rmse: f64,
     /// Iterations run.
     pub iterations: u32,
@@ -125,16 +146,59 @@ pub fn run(args: &OptimizeArgs) -> anyhow::Result<()> {
         args.resume.is_some(),
         args.time_budget,
     )?;
+    let error = |e: Option<f64>| e.map_or("n/a".into(), |e| format!("{e:.4}"));
     println!(
-        "{}: {} iterations in {:.1} s, image RMSE {:.4}, parameter error {} -> {}",
+        "{}: {} iterations in {:.1} s, image RMSE {:.4}, parameter error {} \
+         (best θ, iteration {}; last θ {}), tolerance {}, solved: {} -> {}",
         args.problem.display(),
         s.iterations,
         s.wall_s,
         s.image_rmse,
-        s.param_error.map_or("n/a".into(), |e| format!("{e:.4}")),
+        error(s.param_error),
+        s.best_iteration,
+        error(s.last_param_error),
+        error(s.tolerance),
+        solved_word(s.solved),
         out.display()
     );
     Ok(())
+}
+
+/// `yes`, `no` or `n/a` (no tolerance or no true values).
+pub fn solved_word(solved: Option<bool>) -> &'static str {
+    match solved {
+        Some(true) => "yes",
+        Some(false) => "no",
+        None => "n/a",
+    }
+}
+
+/// `summary.csv`: one header line and one row (see the module doc).
+fn summary_csv(keys: &[String], s: &Summary, best: &[f64], last: &[f64]) -> String {
+    let number = |x: Option<f64>| x.map(|e| format!("{e:e}")).unwrap_or_default();
+    let mut out = String::from(
+        "iterations,wall_s,image_rmse,best_iteration,best_param_error,last_param_error,tolerance,solved",
+    );
+    for k in keys {
+        let _ = write!(out, ",best {k},last {k}");
+    }
+    let _ = write!(
+        out,
+        "\n{},{:.3},{:e},{},{},{},{},{}",
+        s.iterations,
+        s.wall_s,
+        s.image_rmse,
+        s.best_iteration,
+        number(s.param_error),
+        number(s.last_param_error),
+        number(s.tolerance),
+        solved_word(s.solved)
+    );
+    for (b, l) in best.iter().zip(last) {
+        let _ = write!(out, ",{b},{l}");
+    }
+    out.push('\n');
+    out
 }
 
 fn save(out: &Path, name: &str, img: &Image) -> anyhow::Result<()> {
@@ -189,6 +253,9 @@ pub fn optimize(
         .transpose()?;
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let mut opt = Optimization::new(problem)?;
+    for choice in opt.choices() {
+        eprintln!("{choice}");
+    }
     let initial = if let Some(c) = resumed {
         opt.resume(&checkpoint, c)?;
         let file = out.join("initial.exr");
@@ -228,6 +295,12 @@ pub fn optimize(
     }
     bar.finish_and_clear();
     opt.save_checkpoint(&checkpoint)?;
+    let last = opt.theta().to_vec();
+    let (best, best_iteration) = opt.best().map_or((last.clone(), opt.iteration()), |b| {
+        (b.theta.clone(), b.iteration)
+    });
+    let wall_s = opt.checkpoint().wall_s;
+    opt.set_theta(&best);
     let final_image = opt.render(preview_spp);
     save(out, "final", &final_image)?;
     let truth: Vec<Option<f64>> = opt.problem().params.iter().map(|p| p.true_value).collect();
@@ -240,17 +313,25 @@ pub fn optimize(
             param_error: r.param_error,
         })
         .collect();
+    let best_error = param_error(&best, &truth);
+    let tolerance = opt.problem().tolerance;
     let summary = Summary {
-        param_error: param_error(opt.theta(), &truth),
+        param_error: best_error,
+        last_param_error: param_error(&last, &truth),
+        best_iteration,
+        tolerance,
+        solved: best_error.zip(tolerance).map(|(e, t)| e <= t),
         image_rmse: epsm_core::loss::rmse(&final_image, opt.target()),
         iterations: opt.iteration(),
-        wall_s: opt.checkpoint().wall_s,
+        wall_s,
         per_iteration: mean_timings(opt.rows()),
         curve,
         target: opt.target().clone(),
         initial,
         last: final_image,
     };
+    let text = summary_csv(&keys, &summary, &best, &last);
+    write_atomic(&out.join("summary.csv"), text.as_bytes())?;
     let method = opt.problem().optimizer.method.name();
     let mut strip = start_images(&summary);
     strip.push(Thumb {

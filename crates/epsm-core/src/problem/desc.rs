@@ -12,6 +12,12 @@
 //! | `[optimizer]` | no | Adam settings, iterations, hybrid switch, method |
 //! | `[render]` | no | samples of the primal render and the gradient pass |
 //! | `[output]` | no | output folder and checkpoint interval |
+//! | `tolerance` | no | the parameter error that counts as solved |
+//!
+//! A key left out takes its automatic value ([`super::auto`]): step sizes
+//! from each parameter's scale, the decay from the iteration count, the
+//! hybrid switch from progress, the matched render's samples from measured
+//! noise, the colour-flow term when the camera moves.
 //!
 //! ```toml
 //! scene_file = "../caustic-box.toml"
@@ -51,6 +57,9 @@ pub struct ProblemDesc {
     /// Where results go.
     #[serde(default)]
     pub output: OutputDesc,
+    /// The parameter error (RMS of `θ − θ_true`, the parameters' units) at
+    /// or below which the problem counts as solved.
+    pub tolerance: Option<f64>,
 }
 
 /// `[[parameters]]`: one optimized scalar.
@@ -66,7 +75,8 @@ pub struct ParamDesc {
     pub true_value: Option<f64>,
     /// `[lo, hi]` the value is kept in.
     pub bounds: Option<[f64; 2]>,
-    /// Learning rate of this parameter (default: `optimizer.lr`).
+    /// Learning rate of this parameter (default: `optimizer.lr`, else
+    /// automatic from its scale).
     pub lr: Option<f64>,
 }
 
@@ -106,8 +116,9 @@ pub struct LossDesc {
     /// Blur (ε = blur²) of the Sinkhorn solver.
     pub blur: f64,
     /// Whether the OT's screen-position gradients get the colour-flow term
-    /// ([`crate::loss::add_flow`]).
-    pub flow: bool,
+    /// ([`crate::loss::add_flow`]); absent: on when a camera parameter is
+    /// optimized.
+    pub flow: Option<bool>,
 }
 
 impl Default for LossDesc {
@@ -117,7 +128,7 @@ impl Default for LossDesc {
             lambda: 1.0,
             match_resolution: [64, 64],
             blur: 0.01,
-            flow: false,
+            flow: None,
         }
     }
 }
@@ -130,16 +141,22 @@ pub struct OptimizerDesc {
     pub method: String,
     /// Iterations.
     pub iterations: u32,
-    /// Adam learning rate, in user units per step.
-    pub lr: f64,
-    /// Multiplicative learning-rate decay per iteration, in (0, 1].
-    pub decay: f64,
+    /// Adam learning rate of every parameter, in user units per step
+    /// (absent: automatic per parameter).
+    pub lr: Option<f64>,
+    /// Multiplicative learning-rate decay per iteration, in (0, 1] (absent:
+    /// automatic from the iteration count).
+    pub decay: Option<f64>,
     /// Adam β₁.
     pub beta1: f64,
     /// Adam β₂.
     pub beta2: f64,
-    /// Fraction of the iterations run with L2 at the end (hybrid schedule).
-    pub l2_fraction: f64,
+    /// Fraction of the iterations run with L2 at the end (hybrid schedule;
+    /// absent: switch when the OT phase stops improving).
+    pub l2_fraction: Option<f64>,
+    /// Stop once the independent loss has not improved for a window of
+    /// iterations in the L2 phase.
+    pub stop: bool,
     /// Seed of the optimization's random streams.
     pub seed: u32,
 }
@@ -149,11 +166,12 @@ impl Default for OptimizerDesc {
         Self {
             method: "epsm".into(),
             iterations: 60,
-            lr: 0.05,
-            decay: 0.99,
-            beta1: 0.9,
+            lr: None,
+            decay: None,
+            beta1: super::auto::BETA1,
             beta2: 0.999,
-            l2_fraction: 0.0,
+            l2_fraction: None,
+            stop: false,
             seed: 1,
         }
     }
@@ -167,17 +185,17 @@ pub struct RenderPassDesc {
     pub spp_primal: u32,
     /// Gradient pass at the match resolution (records paths), ≥ 1.
     pub spp_grad: u32,
-    /// The image the loss compares at the match resolution, when it is an
-    /// independent render with its own sample count (≥ 1); absent: OT
-    /// compares the gradient pass's own image, L2 an independent render
-    /// at `spp_grad`.
+    /// The image the loss compares at the match resolution: an independent
+    /// render with this many samples per pixel (≥ 1), or 0 for none (OT
+    /// compares the gradient pass's own image, L2 an independent render at
+    /// `spp_grad`); absent: automatic from the measured noise.
     pub spp_match: Option<u32>,
 }
 
 impl Default for RenderPassDesc {
     fn default() -> Self {
         Self {
-            spp_primal: 8,
+            spp_primal: 4,
             spp_grad: 4,
             spp_match: None,
         }

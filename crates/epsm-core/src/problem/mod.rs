@@ -18,6 +18,7 @@
 //! match_resolution = [64, 64]
 //! ```
 
+pub mod auto;
 pub mod desc;
 mod validate;
 
@@ -42,8 +43,11 @@ pub struct ParamSpec {
     pub true_value: Option<f64>,
     /// `[lo, hi]` (`±f64::MAX` when unbounded).
     pub bounds: [f64; 2],
-    /// Learning rate (user units per step).
+    /// Learning rate (user units per step); with `step`, the value for the
+    /// problem file's iteration count, set again for the run's.
     pub lr: f64,
+    /// The scale of an automatic learning rate (`None`: `lr` was given).
+    pub step: Option<auto::Step>,
 }
 
 impl ParamSpec {
@@ -55,6 +59,7 @@ impl ParamSpec {
             true_value: None,
             bounds: [-f64::MAX, f64::MAX],
             lr,
+            step: None,
         }
     }
 
@@ -89,8 +94,9 @@ pub struct LossSettings {
     /// `[width, height]` of the matching and the gradient pass.
     pub match_resolution: [u32; 2],
     /// Whether the OT's screen-position gradients get the colour-flow term
-    /// ([`crate::loss::add_flow`]; for camera moves).
-    pub flow: bool,
+    /// ([`crate::loss::add_flow`]; for camera moves); `None`: automatic, on
+    /// when a camera parameter is optimized.
+    pub flow: Option<bool>,
 }
 
 /// The optimizer and schedule settings.
@@ -100,14 +106,19 @@ pub struct OptimizerSettings {
     pub method: Method,
     /// Iterations.
     pub iterations: u32,
-    /// Multiplicative learning-rate decay per iteration.
-    pub decay: f64,
+    /// Multiplicative learning-rate decay per iteration; `None`: automatic
+    /// ([`auto::decay`] of the iteration count).
+    pub decay: Option<f64>,
     /// Adam β₁.
     pub beta1: f64,
     /// Adam β₂.
     pub beta2: f64,
-    /// Fraction of iterations run with L2 at the end.
-    pub l2_fraction: f64,
+    /// Fraction of iterations run with L2 at the end; `None`: switch when
+    /// the OT phase stops improving ([`crate::schedule::Plateau`]).
+    pub l2_fraction: Option<f64>,
+    /// Stop once the independent loss has not improved for a window of
+    /// iterations in the L2 phase.
+    pub stop: bool,
     /// Seed of the iterations' random streams.
     pub seed: u32,
 }
@@ -120,7 +131,9 @@ pub struct Passes {
     /// Gradient pass at the match resolution.
     pub spp_grad: u32,
     /// Samples per pixel of an independent render at the match resolution
-    /// that the loss compares with the target (see [`Passes::loss_image`]).
+    /// that the loss compares with the target, 0 for none (see
+    /// [`Passes::loss_image`]); `None`: automatic, from the noise measured
+    /// when the run starts.
     pub spp_match: Option<u32>,
 }
 
@@ -135,7 +148,9 @@ pub enum LossImage {
 }
 
 impl Passes {
-    /// The image the loss compares, for an OT (`ot = true`) or L2 iteration.
+    /// The image the loss compares, for an OT (`ot = true`) or L2 iteration,
+    /// once `spp_match` is resolved (`None` and `Some(0)` both read as no
+    /// matched render here).
     ///
     /// L2 always takes an independent render (`spp_match`, else
     /// `spp_grad`): its gradient `2(c − c*)·dc/dθ` is biased when `c` and
@@ -147,7 +162,7 @@ impl Passes {
     /// matched image's variance, not with the number of differentiated
     /// paths.
     pub fn loss_image(&self, ot: bool) -> LossImage {
-        match (self.spp_match, ot) {
+        match (self.spp_match.filter(|&s| s > 0), ot) {
             (Some(spp), _) => LossImage::Independent(spp),
             (None, true) => LossImage::GradientPass,
             (None, false) => LossImage::Independent(self.spp_grad),
@@ -174,11 +189,15 @@ pub struct Problem {
     pub out_dir: PathBuf,
     /// Checkpoint interval in iterations (0: never).
     pub checkpoint_every: u32,
+    /// The parameter error at or below which the problem counts as solved.
+    pub tolerance: Option<f64>,
 }
 
 impl Problem {
     /// A problem over `scene` with default settings (OT exact at 64², 60
-    /// iterations of `epsm`, target rendered at the true values with 256 spp).
+    /// iterations of `epsm`, target rendered at the true values with 256 spp,
+    /// the automatic choices of a problem file that leaves the tuning keys
+    /// out; the step sizes are the parameters' own).
     pub fn new(scene: SceneParts, params: Vec<ParamSpec>) -> Self {
         let (target, loss) = (desc::TargetDesc::default(), desc::LossDesc::default());
         let (opt, render) = (
@@ -206,6 +225,7 @@ impl Problem {
                 beta1: opt.beta1,
                 beta2: opt.beta2,
                 l2_fraction: opt.l2_fraction,
+                stop: opt.stop,
                 seed: opt.seed,
             },
             passes: Passes {
@@ -215,6 +235,7 @@ impl Problem {
             },
             out_dir: PathBuf::from(output.dir),
             checkpoint_every: output.checkpoint_every,
+            tolerance: None,
         }
     }
 }

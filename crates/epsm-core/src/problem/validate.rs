@@ -7,6 +7,7 @@ use epsm_ot::{MIN_BLUR, MatchLimits};
 use epsm_render::Scene;
 use epsm_render::scene::load::{Ctx, Locator, load_parts, parts_from_desc};
 
+use super::auto::scale;
 use super::desc::ProblemDesc;
 use super::{LossSettings, OptimizerSettings, ParamSpec, Passes, Problem, Target};
 use crate::loss::LossKind;
@@ -37,12 +38,15 @@ pub(super) fn problem(d: &ProblemDesc, file: &Path, locator: &Locator) -> OptRes
             .err("parameters", "expected at least one [[parameters]] entry")
             .into());
     }
-    let lr = c.check(
-        "optimizer.lr",
-        d.optimizer.lr,
-        d.optimizer.lr > 0.0,
-        "a positive number",
-    )?;
+    let lr = d
+        .optimizer
+        .lr
+        .map(|v| c.check("optimizer.lr", v, v > 0.0, "a positive number"))
+        .transpose()?;
+    let diagonal = probe
+        .accel()
+        .world_bounds()
+        .map_or(1.0, |(lo, hi)| (hi - lo).length());
     let mut params = Vec::with_capacity(d.parameters.len());
     for (i, p) in d.parameters.iter().enumerate() {
         let f = |name: &str| format!("parameters[{i}].{name}");
@@ -85,16 +89,29 @@ pub(super) fn problem(d: &ProblemDesc, file: &Path, locator: &Locator) -> OptRes
             .true_value
             .map(|v| c.check(&f("true"), v, inside(v), what))
             .transpose()?;
-        let lr =
+        let explicit =
             p.lr.map(|v| c.check(&f("lr"), v, v > 0.0, "a positive number"))
                 .transpose()?
-                .unwrap_or(lr);
+                .or(lr);
+        let step = explicit.is_none().then(|| {
+            scale(
+                &param.target,
+                p.bounds,
+                initial.unwrap_or(param.value),
+                diagonal,
+            )
+        });
+        let lr = match &step {
+            Some(step) => step.lr(d.optimizer.iterations),
+            None => explicit.unwrap_or_default(),
+        };
         params.push(ParamSpec {
             key: p.key.clone(),
             initial,
             true_value,
             bounds,
             lr,
+            step,
         });
     }
     let target = match &d.target.image {
@@ -154,6 +171,10 @@ pub(super) fn problem(d: &ProblemDesc, file: &Path, locator: &Locator) -> OptRes
             .map_err(|e| c.err("loss.match_resolution", e.to_string()))?;
     }
     let o = &d.optimizer;
+    let tolerance = d
+        .tolerance
+        .map(|v| c.check("tolerance", v, v > 0.0, "a positive parameter error"))
+        .transpose()?;
     let method = Method::parse(&o.method).ok_or_else(|| {
         c.err(
             "optimizer.method",
@@ -164,12 +185,17 @@ pub(super) fn problem(d: &ProblemDesc, file: &Path, locator: &Locator) -> OptRes
     let optimizer = OptimizerSettings {
         method,
         iterations: c.count("optimizer.iterations", o.iterations, 1, 1_000_000)?,
-        decay: unit(
-            "optimizer.decay",
-            o.decay,
-            o.decay > 0.0 && o.decay <= 1.0,
-            "a number in (0, 1]",
-        )?,
+        decay: o
+            .decay
+            .map(|v| {
+                unit(
+                    "optimizer.decay",
+                    v,
+                    v > 0.0 && v <= 1.0,
+                    "a number in (0, 1]",
+                )
+            })
+            .transpose()?,
         beta1: unit(
             "optimizer.beta1",
             o.beta1,
@@ -182,12 +208,14 @@ pub(super) fn problem(d: &ProblemDesc, file: &Path, locator: &Locator) -> OptRes
             (0.0..1.0).contains(&o.beta2),
             "a number in [0, 1)",
         )?,
-        l2_fraction: unit(
-            "optimizer.l2_fraction",
-            o.l2_fraction,
-            (0.0..=1.0).contains(&o.l2_fraction),
-            "a number in [0, 1]",
-        )?,
+        l2_fraction: o
+            .l2_fraction
+            .map(|v| {
+                let ok = (0.0..=1.0).contains(&v);
+                unit("optimizer.l2_fraction", v, ok, "a number in [0, 1]")
+            })
+            .transpose()?,
+        stop: o.stop,
         seed: o.seed,
     };
     Ok(Problem {
@@ -207,10 +235,11 @@ pub(super) fn problem(d: &ProblemDesc, file: &Path, locator: &Locator) -> OptRes
             spp_match: d
                 .render
                 .spp_match
-                .map(|v| c.count("render.spp_match", v, 1, 1 << 16))
+                .map(|v| c.count("render.spp_match", v, 0, 1 << 16))
                 .transpose()?,
         },
         out_dir: d.output.dir.clone().into(),
         checkpoint_every: d.output.checkpoint_every,
+        tolerance,
     })
 }

@@ -6,11 +6,11 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
-use super::{OptResult, Optimization, OptimizeError};
+use super::{Best, OptResult, Optimization, OptimizeError};
 use crate::drops::DropReason;
 use crate::optim::Adam;
 use crate::report::{Row, write_atomic};
-use crate::schedule::Method;
+use crate::schedule::{Method, Switch};
 
 /// What a checkpoint holds: enough to continue a run exactly.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -27,6 +27,16 @@ pub struct Checkpoint {
     pub method: Method,
     /// The rows so far.
     pub rows: Vec<Row>,
+    /// The hybrid switch: decided, or the plateau detector's state
+    /// (absent from checkpoints written before it was saved: the problem's).
+    #[serde(default)]
+    pub switch: Option<Switch>,
+    /// The best judged θ so far.
+    #[serde(default)]
+    pub best: Option<Best>,
+    /// Whether the run stopped converged (`optimizer.stop`).
+    #[serde(default)]
+    pub stopped: bool,
 }
 
 impl Optimization {
@@ -39,6 +49,9 @@ impl Optimization {
             wall_s: self.wall_before + self.started.elapsed().as_secs_f64(),
             method: self.schedule.method,
             rows: self.rows.clone(),
+            switch: Some(self.schedule.switch.clone()),
+            best: self.best.clone(),
+            stopped: self.stopped,
         }
     }
 
@@ -51,6 +64,11 @@ impl Optimization {
         self.wall_before = c.wall_s;
         self.started = Instant::now();
         self.rows = c.rows;
+        if let Some(switch) = c.switch {
+            self.schedule.switch = switch;
+        }
+        self.best = c.best;
+        self.stopped = c.stopped;
         self.set_theta(&c.theta);
         Ok(())
     }
@@ -115,6 +133,12 @@ impl Optimization {
             return Err(format!(
                 "theta[{i}]: {} is outside the bounds {:?}",
                 x.0, x.1
+            ));
+        }
+        if let Some(b) = c.best.as_ref().filter(|b| b.theta.len() != n) {
+            return Err(format!(
+                "best.theta: {} values for {n} parameters",
+                b.theta.len()
             ));
         }
         if !(c.wall_s.is_finite() && c.wall_s >= 0.0) {

@@ -2,6 +2,14 @@
 //! pass → loss → `dL/dθ` → Adam, one [`Row`] per iteration, checkpoints of
 //! θ and the optimizer state, and resume.
 //!
+//! When the run starts, the settings the problem left automatic are chosen
+//! ([`Optimization::choices`]): the colour-flow term, the learning-rate
+//! decay, the matched render's samples ([`noise`]) and the hybrid switch
+//! ([`crate::schedule::Plateau`]). Every few iterations θ is judged on an
+//! independent render and the best is kept ([`best`]); with
+//! `optimizer.stop` the run ends once that judgement stops improving in the
+//! L2 phase.
+//!
 //! Every random stream is keyed by the problem's seed and the iteration, so
 //! a run resumed from a checkpoint follows the same θ trajectory as one that
 //! was never interrupted.
@@ -27,8 +35,10 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+pub mod best;
 mod checkpoint;
 mod error;
+pub mod noise;
 
 use std::sync::{Mutex, PoisonError};
 use std::time::Instant;
@@ -38,17 +48,20 @@ use epsm_render::record::PathRecord;
 use epsm_render::tracer::{RenderOptions, render, render_recorded};
 use epsm_render::{Image, Scene};
 
+pub use best::{Best, Judge};
 pub use checkpoint::Checkpoint;
 pub use error::{OptResult, OptimizeError};
+use noise::Noise;
 
 use crate::backprop::{PassInput, PassStats, backprop, record_level};
 use crate::colour::{ColourModel, PrimaryMotion};
 use crate::loss::{LossEval, add_flow, evaluate, resample, rmse};
 use crate::optim::{Adam, AdamSettings};
 use crate::params::ParamTable;
+use crate::problem::auto::{self, Choice, is_camera, is_geometric};
 use crate::problem::{LossImage, Problem, Target};
 use crate::report::{Row, Timings, param_error};
-use crate::schedule::Schedule;
+use crate::schedule::{Method, Schedule};
 
 /// A scene and its parameter table (one per resolution).
 #[derive(Clone, Debug)]
@@ -113,11 +126,36 @@ pub struct Optimization {
     /// What the last exact match left for the next ([`MatchState`]; a
     /// resumed run starts without it, which changes its matchings only among ties).
     warm: Mutex<MatchState>,
+    choices: Vec<Choice>,
+    judge: Judge,
+    best: Option<Best>,
+    stopped: bool,
 }
 
+/// Iterations without progress that end the OT phase or (with
+/// `optimizer.stop`) the run: an eighth of the run, at least 4.
+fn window(iterations: u32) -> u32 {
+    (iterations / 8).max(4)
+}
+
+/// The latest iteration that may still run OT: three quarters of the run.
+fn latest_switch(iterations: u32) -> u32 {
+    (f64::from(iterations) * 0.75).round() as u32
+}
+
+/// The seed of a random stream of iteration `iteration` of a run seeded
+/// `seed`, told apart by `salt`.
+fn stream_seed(seed: u32, iteration: u32, salt: u32) -> u32 {
+    seed.wrapping_mul(0x9E37_79B9) ^ iteration.wrapping_mul(7919) ^ salt
+}
+
+/// Salt of the judged render's stream (the same at every iteration).
+const JUDGE_SALT: u32 = 0x0B35_7E11;
+
 impl Optimization {
-    /// Sets up `problem` (renders the target when it is given by true values).
-    pub fn new(problem: Problem) -> OptResult<Self> {
+    /// Sets up `problem` (renders the target when it is given by true
+    /// values) and makes the automatic choices it leaves open.
+    pub fn new(mut problem: Problem) -> OptResult<Self> {
         let cam = &problem.scene.camera;
         let mut primal = View::new(&problem, cam.width, cam.height)?;
         let [mw, mh] = problem.loss.match_resolution;
@@ -145,6 +183,8 @@ impl Optimization {
         let target_match = resample(&target, mw, mh);
         primal.set(&theta);
         grad.set(&theta);
+        let mut choices = Vec::new();
+        let (schedule, judge) = choose(&mut problem, &grad, &target_match, &mut choices);
         let o = &problem.optimizer;
         let adam = Adam::new(AdamSettings {
             lr: problem.params.iter().map(|p| p.lr).collect(),
@@ -157,17 +197,11 @@ impl Optimization {
                     [lo.max(t.target.step_floor()).min(hi), hi]
                 })
                 .collect(),
-            decay: o.decay,
+            decay: o.decay.unwrap_or(1.0),
             beta1: o.beta1,
             beta2: o.beta2,
             epsilon: 1e-12,
         });
-        let schedule = Schedule {
-            method: o.method,
-            loss: problem.loss.kind,
-            iterations: o.iterations,
-            l2_fraction: o.l2_fraction,
-        };
         Ok(Self {
             problem,
             schedule,
@@ -182,7 +216,28 @@ impl Optimization {
             started: Instant::now(),
             rows: Vec::new(),
             warm: Mutex::default(),
+            choices,
+            judge,
+            best: None,
+            stopped: false,
         })
+    }
+
+    /// Every automatic choice of the problem and the run, in the order
+    /// made (print them at the start of a run).
+    pub fn choices(&self) -> &[Choice] {
+        &self.choices
+    }
+
+    /// The θ with the lowest judged loss so far ([`best`]).
+    pub fn best(&self) -> Option<&Best> {
+        self.best.as_ref()
+    }
+
+    /// The first L2 iteration (the iteration count when none is, or while
+    /// the switch is not decided).
+    pub fn switch(&self) -> u32 {
+        self.schedule.switch()
     }
 
     /// The problem.
@@ -205,9 +260,10 @@ impl Optimization {
         self.iteration
     }
 
-    /// Whether every scheduled iteration has run.
+    /// Whether every scheduled iteration has run, or the run stopped
+    /// converged (`optimizer.stop`).
     pub fn is_done(&self) -> bool {
-        self.iteration >= self.schedule.iterations
+        self.iteration >= self.schedule.iterations || self.stopped
     }
 
     /// The rows so far.
@@ -250,9 +306,14 @@ impl Optimization {
     }
 
     fn seed(&self, salt: u32) -> u32 {
-        self.problem.optimizer.seed.wrapping_mul(0x9E37_79B9)
-            ^ self.iteration.wrapping_mul(7919)
-            ^ salt
+        stream_seed(self.problem.optimizer.seed, self.iteration, salt)
+    }
+
+    /// The judged loss of the current θ ([`best`]).
+    fn judged(&self) -> f64 {
+        let seed = stream_seed(self.problem.optimizer.seed, 0, JUDGE_SALT);
+        let image = render_image(&self.grad.scene, self.judge.spp, seed);
+        best::judged_loss(&image, &self.target_match)
     }
 
     /// `dL/dθ` at the current θ for the current iteration's loss and paths,
@@ -288,7 +349,7 @@ impl Optimization {
             self.problem.loss.lambda,
             Some(warm),
         )?;
-        if self.problem.loss.flow && kind.is_ot() {
+        if self.problem.loss.flow == Some(true) && kind.is_ot() {
             add_flow(&image, &mut loss)?;
         }
         let t2 = Instant::now();
@@ -332,6 +393,14 @@ impl Optimization {
         if self.schedule.resets_at(self.iteration) {
             self.adam.reset();
         }
+        let judged = self
+            .judge
+            .judges(self.iteration, false)
+            .then(|| self.judged());
+        if let Some(loss) = judged {
+            Best::offer(&mut self.best, self.iteration, &self.theta, loss);
+        }
+        let ot = self.schedule.loss_at(self.iteration).is_ot();
         let truth: Vec<Option<f64>> = self.problem.params.iter().map(|p| p.true_value).collect();
         let row = Row {
             iteration: self.iteration,
@@ -339,6 +408,7 @@ impl Optimization {
             loss: g.loss.value,
             image_rmse: rmse(&image, &self.target),
             param_error: param_error(&self.theta, &truth),
+            judged_loss: judged,
             theta: self.theta.clone(),
             paths: [g.stats.traced, g.stats.solved, g.stats.skipped],
             dropped: crate::drops::DropReason::ALL
@@ -358,10 +428,138 @@ impl Optimization {
             OptimizeError::NonFiniteGradient(key.unwrap_or_else(|| e.param.to_string()))
         })?;
         self.set_theta(&theta);
+        if ot {
+            self.schedule.observe(self.iteration, g.loss.value);
+        }
         self.iteration += 1;
+        self.stopped = self.converged();
+        if self.is_done() {
+            let loss = self.judged();
+            Best::offer(&mut self.best, self.iteration, &self.theta, loss);
+        }
         self.rows.push(row.clone());
         Ok(row)
     }
+
+    /// Whether `optimizer.stop` ends the run now: the judged loss has not
+    /// improved for a window of iterations since the L2 phase began.
+    fn converged(&self) -> bool {
+        let switch = self.schedule.switch();
+        if !self.problem.optimizer.stop || self.iteration < switch {
+            return false;
+        }
+        let since = self.best.as_ref().map_or(0, |b| b.iteration).max(switch);
+        self.iteration - since >= window(self.schedule.iterations)
+    }
+}
+
+/// Makes the run's automatic choices for `problem` (resolving its
+/// `None` settings in place, recording each in `choices`): the step sizes,
+/// the colour-flow term, the decay, the matched render's samples and the
+/// hybrid switch.
+/// Returns the schedule and the judge of θ.
+fn choose(
+    problem: &mut Problem,
+    grad: &View,
+    target_match: &Image,
+    choices: &mut Vec<Choice>,
+) -> (Schedule, Judge) {
+    let targets: Vec<_> = grad.table.params().iter().map(|p| p.target).collect();
+    let n = problem.optimizer.iterations;
+    for (i, p) in problem.params.iter_mut().enumerate() {
+        if let Some(step) = &p.step {
+            p.lr = step.lr(n);
+            let why = format!(
+                "{}: {} x scale / {n} iterations, scale {} ({})",
+                p.key,
+                auto::CROSSING,
+                step.scale,
+                step.why
+            );
+            choices.push(Choice::new(
+                format!("parameters[{i}].lr"),
+                format!("{:.4}", p.lr),
+                why,
+            ));
+        }
+    }
+    if problem.loss.flow.is_none() {
+        let camera = targets.iter().any(is_camera);
+        let why = if camera {
+            "a camera parameter is optimized: the whole image moves"
+        } else {
+            "no camera parameter is optimized"
+        };
+        problem.loss.flow = Some(camera);
+        choices.push(Choice::new("loss.flow", camera.to_string(), why));
+    }
+    if problem.optimizer.decay.is_none() {
+        let d = auto::decay(n);
+        problem.optimizer.decay = Some(d);
+        let why = format!(
+            "the learning rate falls to 1/{} of its first value over {n} iterations",
+            auto::FINAL_LR_DIVISOR
+        );
+        choices.push(Choice::new("optimizer.decay", format!("{d:.4}"), why));
+    }
+    let spp_grad = problem.passes.spp_grad;
+    if problem.passes.spp_match.is_none() && problem.loss.flow == Some(true) {
+        problem.passes.spp_match = Some(0);
+        let why = "the colour-flow term turns the matching's colour residual into the camera's \
+                   gradient, and a clean matched image leaves almost none: the gradient pass's image";
+        choices.push(Choice::new("render.spp_match", "0", why));
+    }
+    if problem.passes.spp_match.is_none() {
+        let seed = problem.optimizer.seed;
+        let seeds = [stream_seed(seed, 0, 0xA1), stream_seed(seed, 0, 0xA2)];
+        let noise = Noise::measure(&grad.scene, target_match, seeds);
+        let spp = noise.spp_match(spp_grad);
+        problem.passes.spp_match = Some(spp);
+        let why = format!(
+            "noise of one sample {:.2e} against the target's signal {:.2e} (tone-mapped variances): \
+             {:.0} spp keep the noise under {} % of the signal{}",
+            noise.per_sample,
+            noise.signal,
+            noise.needed_spp(),
+            noise::NOISE_FRACTION * 100.0,
+            if spp == 0 {
+                format!("; the gradient pass's {spp_grad} spp do")
+            } else {
+                format!(" (a power of two, at most {})", noise::MAX_SPP)
+            }
+        );
+        choices.push(Choice::new("render.spp_match", spp.to_string(), why));
+    }
+    let o = &problem.optimizer;
+    let kind = problem.loss.kind;
+    let ot = o.method != Method::L2 && kind.is_ot();
+    let schedule = match o.l2_fraction {
+        Some(f) => Schedule::fixed(o.method, kind, n, f),
+        None if ot && !targets.iter().any(is_geometric) => {
+            let why = "every parameter is a material value: L2 throughout";
+            choices.push(Choice::new("optimizer.l2_fraction", "1", why));
+            Schedule::fixed(o.method, kind, n, 1.0)
+        }
+        None => {
+            let (w, latest) = (window(n), latest_switch(n));
+            if ot {
+                let why = format!(
+                    "switch from OT to L2 (Adam reset) once the OT loss's moving average has not \
+                     fallen by 1 % for {w} iterations, at the latest before iteration {latest}"
+                );
+                choices.push(Choice::new("optimizer.l2_fraction", "on plateau", why));
+            }
+            Schedule::on_plateau(o.method, kind, n, w, latest)
+        }
+    };
+    let judge = Judge::new(n, problem.passes.spp_match.unwrap_or(0), spp_grad);
+    let why = format!(
+        "θ judged every {} iterations and at the end on an independent {}-spp render \
+         (tone-mapped L2 against the target); the best is reported and rendered",
+        judge.every, judge.spp
+    );
+    choices.push(Choice::new("best", "judged", why));
+    (schedule, judge)
 }
 
 fn render_image(scene: &Scene, spp: u32, seed: u32) -> Image {

@@ -1,0 +1,120 @@
+//! The best θ of a run, judged on an independent render.
+//!
+//! Every [`Judge::every`] iterations, and at the final θ, the scene is
+//! rendered at the match resolution with [`Judge::spp`] samples per pixel
+//! and a seed of its own that does not change from one evaluation to the
+//! next (common random numbers: two θ are compared under the same noise).
+//! Its loss is the mean squared difference of tone-mapped colours against
+//! the target ([`judged_loss`]); the θ with the lowest is kept ([`Best`]),
+//! reported beside the last and used for the final images.
+
+use epsm_render::Image;
+use serde::{Deserialize, Serialize};
+
+use crate::loss::tone_map;
+
+/// The lowest judged loss so far and where it was met.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Best {
+    /// The iteration whose θ it is (the iteration count for the final θ).
+    pub iteration: u32,
+    /// θ (user units).
+    pub theta: Vec<f64>,
+    /// Its judged loss.
+    pub loss: f64,
+}
+
+/// How θ is judged.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Judge {
+    /// Samples per pixel of the judged render.
+    pub spp: u32,
+    /// Evaluate every this many iterations (and at the final θ).
+    pub every: u32,
+}
+
+impl Judge {
+    /// Fewest samples per pixel of the judged render.
+    pub const MIN_SPP: u32 = 16;
+    /// Most samples per pixel of the judged render.
+    pub const MAX_SPP: u32 = 64;
+
+    /// The judge of a run of `iterations` whose matched image has
+    /// `spp_match` samples (0: the gradient pass's `spp_grad`): at least
+    /// as many samples as the matched image, within
+    /// `[MIN_SPP, MAX_SPP]`, about twenty evaluations per run.
+    pub fn new(iterations: u32, spp_match: u32, spp_grad: u32) -> Self {
+        Self {
+            spp: spp_match.max(spp_grad).clamp(Self::MIN_SPP, Self::MAX_SPP),
+            every: (iterations / 20).max(1),
+        }
+    }
+
+    /// Whether the θ of `iteration` is judged (`done`: it is the final θ).
+    pub fn judges(&self, iteration: u32, done: bool) -> bool {
+        done || iteration.is_multiple_of(self.every)
+    }
+}
+
+/// Mean squared difference of the tone-mapped colours of `image` and
+/// `target` over pixels and channels.
+pub fn judged_loss(image: &Image, target: &Image) -> f64 {
+    let n = (3 * image.pixels.len().max(1)) as f64;
+    let sum: f64 = image
+        .pixels
+        .iter()
+        .zip(&target.pixels)
+        .map(|(a, b)| {
+            (0..3)
+                .map(|k| f64::from(tone_map(a[k]) - tone_map(b[k])).powi(2))
+                .sum::<f64>()
+        })
+        .sum();
+    sum / n
+}
+
+impl Best {
+    /// Keeps `theta` of `iteration` when its `loss` is lower than the best
+    /// so far (`best` is `None` before the first evaluation); returns
+    /// whether it did.
+    pub fn offer(best: &mut Option<Best>, iteration: u32, theta: &[f64], loss: f64) -> bool {
+        if best.as_ref().is_some_and(|b| b.loss <= loss) {
+            return false;
+        }
+        *best = Some(Best {
+            iteration,
+            theta: theta.to_vec(),
+            loss,
+        });
+        true
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    #[test]
+    fn the_best_keeps_the_lowest_loss_and_the_judge_its_rhythm() {
+        let mut best = None;
+        assert!(Best::offer(&mut best, 0, &[1.0], 0.5));
+        assert!(Best::offer(&mut best, 2, &[0.5], 0.2));
+        assert!(!Best::offer(&mut best, 4, &[0.7], 0.3));
+        let b = best.expect("kept");
+        assert_eq!((b.iteration, b.theta[0]), (2, 0.5));
+        let j = Judge::new(40, 128, 4);
+        assert_eq!((j.spp, j.every), (Judge::MAX_SPP, 2));
+        assert!(j.judges(4, false) && !j.judges(5, false) && j.judges(5, true));
+        assert_eq!(Judge::new(10, 0, 4).spp, Judge::MIN_SPP);
+    }
+
+    #[test]
+    fn the_judged_loss_compares_tone_mapped_colours() {
+        let mut a = Image::new(2, 1);
+        let b = Image::new(2, 1);
+        assert_eq!(judged_loss(&a, &b), 0.0);
+        a.pixels[0] = Vec3::splat(1.0);
+        assert!((judged_loss(&a, &b) - 0.25 * 3.0 / 6.0).abs() < 1e-9);
+    }
+}
