@@ -1,4 +1,4 @@
-//! The gradient pass of one iteration (DESIGN §3): from recorded paths and
+//! The gradient pass of one iteration (docs/design.md §3): from recorded paths and
 //! the loss's per-pixel gradients to `dL/dθ`.
 //!
 //! For every recorded path sample of a pixel with a non-zero gradient:

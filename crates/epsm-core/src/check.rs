@@ -1,5 +1,5 @@
 //! Per-type validation of the manifold derivatives against the Newton oracle
-//! (DESIGN §7), as `epsm check` reports it.
+//! (docs/design.md §7), as `epsm check` reports it.
 //!
 //! For each path: re-solve `C = 0` at θ₀ (the record's `f32` vertices only
 //! satisfy it to ~1e-7), take the forward `dp/dθ` there, and compare with the

@@ -1,4 +1,4 @@
-//! Why a path was not differentiated, and how often (DESIGN §6).
+//! Why a path was not differentiated, and how often (docs/design.md §6).
 //!
 //! Nothing is clipped or scrubbed: a path whose derivative would be
 //! unreliable is dropped with a reason, and the reasons are counted in every

@@ -2,7 +2,7 @@
 //!
 //! How the screen position `p` of a traced path's visible effect moves when
 //! scene parameters θ change (Xing et al., "Extended Path Space Manifolds for
-//! Physically Based Differentiable Rendering", SIGGRAPH Asia 2023; DESIGN §5).
+//! Physically Based Differentiable Rendering", SIGGRAPH Asia 2023; docs/design.md §5).
 //! A recorded path ([`epsm_render::record::PathRecord`]) is classified into
 //! differentiable paths ([`paths::classify`]); each gets geometric constraints
 //! `C(u, θ) = 0` on its unknown vertices, and the implicit function theorem
@@ -43,7 +43,7 @@
 //! - **Precision**: everything here is `f64`, recomputed from the meshes (or
 //!   the exact spheres' octahedral coordinates) and transforms, never from
 //!   the `f32` record positions.
-//! - **Robustness** (DESIGN §6): a path that cannot be differentiated reliably
+//! - **Robustness** (docs/design.md §6): a path that cannot be differentiated reliably
 //!   is dropped with a [`drops::DropReason`] and counted; nothing is clipped or
 //!   scrubbed.
 //! - **On the manifold**: [`classify`] projects each path onto `C = 0` (the

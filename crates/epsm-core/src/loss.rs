@@ -1,4 +1,4 @@
-//! Image losses and their per-pixel gradients (DESIGN §5.7).
+//! Image losses and their per-pixel gradients (docs/design.md §5.7).
 //!
 //! Both losses compare a rendered image with the target at the match
 //! resolution and return, per pixel, `g_rgb = ∂L/∂c` (linear colour) and

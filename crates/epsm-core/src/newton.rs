@@ -1,4 +1,4 @@
-//! The Newton re-solve oracle (DESIGN §7).
+//! The Newton re-solve oracle (docs/design.md §7).
 //!
 //! Given θ₀ + δ, start from `u = 0` and iterate `u ← u − t A⁻¹C(u, θ)` with
 //! the step `t` halved until `‖C‖∞` decreases, to `‖C‖∞ < tolerance` (C is

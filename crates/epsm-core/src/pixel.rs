@@ -1,6 +1,6 @@
 //! The camera projection π in any scalar type, so that one function gives
 //! pixels in `f64` and, with dual numbers, `∂π/∂x` and `∂π/∂θ_camera`
-//! (DESIGN §5.5: `dp/dθ = J_π (∂x1/∂u1 · du1/dθ + ∂x1/∂θ) + ∂π/∂θ_cam`).
+//! (docs/design.md §5.5: `dp/dθ = J_π (∂x1/∂u1 · du1/dθ + ∂x1/∂θ) + ∂π/∂θ_cam`).
 //!
 //! The formula is `epsm_render::Camera::project_with_jacobian`'s:
 //! `x_pix = w/2 + k_x (d·right)/(d·forward)`, `y_pix = h/2 − k_y (d·up)/(d·forward)`

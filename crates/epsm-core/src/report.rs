@@ -1,4 +1,4 @@
-//! Run reports (DESIGN §8): one row per iteration, written as `run.csv`.
+//! Run reports (docs/design.md §8): one row per iteration, written as `run.csv`.
 //!
 //! Columns: `iteration,wall_s,loss,image_rmse,param_error`, then one column
 //! per parameter (its value, in user units, headed by its key), then

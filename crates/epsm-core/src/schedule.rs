@@ -1,4 +1,4 @@
-//! Methods and the hybrid schedule (DESIGN §5.8).
+//! Methods and the hybrid schedule (docs/design.md §5.8).
 //!
 //! | method | loss | screen-position gradients |
 //! |---|---|---|

@@ -1,5 +1,5 @@
 //! Assembly of `A = ∂C/∂u` and `B = ∂C/∂θ`, the pivoted LU with its
-//! conditioning checks, and the adjoint and forward solves (DESIGN §5.5, §6).
+//! conditioning checks, and the adjoint and forward solves (docs/design.md §5.5, §6).
 //!
 //! - Adjoint (one solve per path): `Aᵀλ = (gᵀ J_π ∂x1/∂u1)ᵀ` on the rows of
 //!   `u1`, then `dL/dθ = −λᵀB + gᵀ(J_π ∂x1/∂θ|u + ∂π/∂θ_cam)`.

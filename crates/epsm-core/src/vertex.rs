@@ -1,5 +1,5 @@
 //! Tangent parameterisation of a path vertex on a surface: a triangle or an
-//! exact sphere (DESIGN §5.1).
+//! exact sphere (docs/design.md §5.1).
 //!
 //! Units and frames: object-space points and normals of the object's
 //! [`Surface`]; world-space results through the placement `M(θ)` (linear

@@ -1,4 +1,4 @@
-//! What `classify` makes of each record pattern (DESIGN §5.4), including
+//! What `classify` makes of each record pattern (docs/design.md §5.4), including
 //! the unknown/fixed layout, parameter selection and background endings.
 
 mod common;

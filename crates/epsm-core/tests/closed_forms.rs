@@ -1,4 +1,4 @@
-//! Closed forms (DESIGN §7): a point seen in a flat mirror moves as its
+//! Closed forms (docs/design.md §7): a point seen in a flat mirror moves as its
 //! reflection; a point seen through a parallel slab is offset by the known
 //! lateral shift and follows the slab's thickness by the 1-D refraction
 //! equation; a point light's shadow of a point occluder on a plane moves by

@@ -1,4 +1,4 @@
-//! A caustic fold (DESIGN §6): a concave mirror images the camera onto the
+//! A caustic fold (docs/design.md §6): a concave mirror images the camera onto the
 //! seen point (Coddington's equations), so `A` is singular. The path must be
 //! dropped and counted, never give NaN or a huge gradient; the same mirror
 //! away from the fold validates.

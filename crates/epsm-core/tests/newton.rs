@@ -1,4 +1,4 @@
-//! Newton agreement for every path type on random configurations (DESIGN §7):
+//! Newton agreement for every path type on random configurations (docs/design.md §7):
 //! random triangles or exact spheres (non-uniformly scaled: ellipsoids),
 //! file transforms, orientations, IORs, roughness samples and parameter
 //! kinds (translation, rotation, scale, light, camera).

@@ -1,4 +1,4 @@
-//! The stress set of DESIGN §6: every case must give finite gradients that
+//! The stress set of docs/design.md §6: every case must give finite gradients that
 //! agree with the Newton oracle, or a counted drop; never NaN or huge.
 
 mod common;

@@ -1,5 +1,5 @@
 //! Perspective pinhole camera: pixel → ray, and world point → pixel with its
-//! Jacobian (the projection π of DESIGN §5.5).
+//! Jacobian (the projection π of docs/design.md §5.5).
 //!
 //! | key | unit | default | meaning |
 //! |---|---|---|---|

@@ -1,5 +1,5 @@
 //! `epsm check`: validates the manifold derivatives of a scene's traced
-//! paths against the Newton re-solve oracle (DESIGN §7), per path type.
+//! paths against the Newton re-solve oracle (docs/design.md §7), per path type.
 //!
 //! ```text
 //! epsm check <SCENE> [--json] [--samples N] [--param KEY ...] [--max-per-type N] [--seed N]

@@ -1,4 +1,4 @@
-//! Colour derivatives of a recorded path for geometric parameters (DESIGN
+//! Colour derivatives of a recorded path for geometric parameters (docs/design.md
 //! §5.6, the interior term): how the path's radiance changes while its
 //! vertices move with θ and visibility stays as recorded.
 //!

@@ -1,4 +1,4 @@
-//! Colour derivatives `dc/dθ` of recorded paths (DESIGN §5.6): how a path
+//! Colour derivatives `dc/dθ` of recorded paths (docs/design.md §5.6): how a path
 //! sample's radiance changes with θ at fixed sampled random numbers.
 //!
 //! A path sample's radiance is a sum of terms (emission hit by BSDF

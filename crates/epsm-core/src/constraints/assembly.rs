@@ -3,7 +3,7 @@
 //! constraint `r` on rows `2r, 2r+1`, unknown `q` on columns `2q, 2q+1`) and
 //! `B = ∂C/∂θ` (2k × |θ_path|) by chaining each constraint's 2×12 local
 //! Jacobian with `∂x/∂u`, `∂n/∂u`, `∂x/∂θ`, `∂n/∂θ` (`assemble`), with the
-//! geometric guards of DESIGN §6 (grazing angles, short segments, total
+//! geometric guards of docs/design.md §6 (grazing angles, short segments, total
 //! internal reflection, reflection/refraction mismatch, non-finite values).
 
 use glam::DVec3;

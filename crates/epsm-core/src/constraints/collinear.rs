@@ -1,4 +1,4 @@
-//! The shadow receiver's constraint (DESIGN §5.3):
+//! The shadow receiver's constraint (docs/design.md §5.3):
 //! `C = [F·(normalize(o − x) − normalize(y − x))]_xy`.
 //!
 //! A shadow path camera → D ⇢ o ⇢ y keeps `D` on the line from the light

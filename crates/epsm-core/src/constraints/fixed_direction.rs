@@ -1,4 +1,4 @@
-//! The caustic receiver's constraint (DESIGN §5.3): `C = [F·wo]_xy − c`.
+//! The caustic receiver's constraint (docs/design.md §5.3): `C = [F·wo]_xy − c`.
 //!
 //! The first diffuse vertex `D` of a caustic path camera → D → S⁺ → L keeps
 //! receiving light from the same direction in its own transported frame; `c`

@@ -1,4 +1,4 @@
-//! Half-vector constraints at specular and glossy vertices (DESIGN §5.3).
+//! Half-vector constraints at specular and glossy vertices (docs/design.md §5.3).
 //!
 //! - Smooth reflection / refraction: `C = [F·(wi + η wo)]_xy`, unnormalised.
 //!   Its zero set is the law of reflection (η = 1) or Snell's law with

@@ -1,4 +1,4 @@
-//! Path constraints: one 2-D constraint per unknown vertex (DESIGN §5.3).
+//! Path constraints: one 2-D constraint per unknown vertex (docs/design.md §5.3).
 //!
 //! Every constraint is a function of four world vectors: the vertex before
 //! `a`, the vertex itself `x`, the vertex after `b`, and the shading normal `n`

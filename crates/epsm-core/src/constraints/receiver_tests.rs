@@ -1,5 +1,5 @@
 //! The caustic receiver's constraint against the alternative "the last chain
-//! segment toward the light keeps its world direction" (DESIGN §5.3).
+//! segment toward the light keeps its world direction" (docs/design.md §5.3).
 //!
 //! Measured on camera → D (plane) → S (flat mirror) → L (emitter), both
 //! variants re-solved onto `C = 0` and differentiated in forward mode:

@@ -1,6 +1,6 @@
 //! Where every object, point light and the camera sits at one parameter
 //! vector θ, with the derivatives of those placements with respect to the
-//! parameters that drive them (DESIGN §5.2).
+//! parameters that drive them (docs/design.md §5.2).
 //!
 //! A [`Motion`] is computed once per θ (per optimisation iteration, or per
 //! Newton probe); per-path work then only looks up the few objects a path

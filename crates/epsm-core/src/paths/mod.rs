@@ -1,5 +1,5 @@
 //! Differentiable path types and the classification of recorded paths
-//! (DESIGN §5.4).
+//! (docs/design.md §5.4).
 //!
 //! | kind | pattern | unknowns | constraints |
 //! |---|---|---|---|

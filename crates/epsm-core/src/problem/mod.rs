@@ -1,4 +1,4 @@
-//! Optimization problems (DESIGN §4): a scene, the parameters to recover,
+//! Optimization problems (docs/design.md §4): a scene, the parameters to recover,
 //! the target, the loss, the optimizer and the output settings, loaded from
 //! a TOML problem file ([`desc`], `docs/problem-format.md`) or built in code.
 //!

@@ -1,4 +1,4 @@
-//! One optimization (DESIGN §3): θ → scene → primal render and gradient
+//! One optimization (docs/design.md §3): θ → scene → primal render and gradient
 //! pass → loss → `dL/dθ` → Adam, one [`Row`] per iteration, checkpoints of
 //! θ and the optimizer state, and resume.
 //!

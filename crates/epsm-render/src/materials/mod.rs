@@ -67,7 +67,7 @@ pub struct Material {
     pub two_sided: bool,
 }
 
-/// What kind of manifold vertex a material makes (DESIGN §5.4).
+/// What kind of manifold vertex a material makes (docs/design.md §5.4).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum VertexKind {
     /// Ends a specular chain (Lambertian).
