@@ -310,12 +310,14 @@ fn snap_up(v: f64) -> f64 {
     m * p
 }
 
-/// `m × 10^k` for the mantissas `m` and every `every`-th decade `k`, within
-/// `[lo, hi]` (to rounding), ascending.
+/// `m × 10^k` for the mantissas `m` and every `every`-th decade `k` from the
+/// first power of ten in the range, within `[lo, hi]` (to rounding),
+/// ascending.
 fn values_between(lo: f64, hi: f64, mantissas: &[u32], every: i32) -> Vec<f64> {
     let (k0, k1) = (lo.log10().floor() as i32, hi.log10().ceil() as i32);
+    let first = lo.log10().ceil() as i32;
     let mut out = Vec::new();
-    for k in (k0..=k1).filter(|k| (k - k0).rem_euclid(every) == 0) {
+    for k in (k0..=k1).filter(|k| (k - first).rem_euclid(every) == 0) {
         for &m in mantissas {
             let v = f64::from(m) * 10f64.powi(k);
             if v >= lo * (1.0 - 1e-9) && v <= hi * (1.0 + 1e-9) {
