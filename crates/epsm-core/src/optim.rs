@@ -9,9 +9,9 @@
 //!
 //! | key (`[optimizer]`) | default | range |
 //! |---|---|---|
-//! | `lr` | 0.05 | > 0 (per parameter: `parameters[i].lr`) |
-//! | `decay` | 0.99 | (0, 1] |
-//! | `beta1` | 0.9 | [0, 1) |
+//! | `lr` | automatic per parameter ([`crate::problem::auto`]) | > 0 (per parameter: `parameters[i].lr`) |
+//! | `decay` | automatic: `(1/20)^(1/iterations)` | (0, 1] |
+//! | `beta1` | 0.5 ([`crate::problem::auto::BETA1`]) | [0, 1) |
 //! | `beta2` | 0.999 | [0, 1) |
 
 use serde::{Deserialize, Serialize};

@@ -6,7 +6,7 @@
 //! |---|---|
 //! | `parameters[i].lr` | [`CROSSING`] × scale / iterations; the scale is the bound width, else a quarter of the scene's bounding-box diagonal for positions, [`ANGLE_SCALE`] for angles, the key's range for albedo and alpha, the value's magnitude (at least 1) for other factors |
 //! | `optimizer.decay` | `(1/`[`FINAL_LR_DIVISOR`]`)^(1/iterations)`: the last step is 1/20 of the first |
-//! | `optimizer.beta1` | [`BETA1`] (a constant measured over the shipped problems) |
+//! | `optimizer.beta1` | [`BETA1`] |
 //! | `loss.flow` | on when a camera parameter is optimized |
 //!
 //! The hybrid switch and the matched render's samples are chosen when the
@@ -16,9 +16,10 @@ use std::fmt;
 
 use crate::params::Target;
 
-/// Adam's β₁ when `optimizer.beta1` is absent. Chosen over the shipped
-/// problems on three seeds each: with 0.9 a light or a block that reaches
-/// its place at full speed overshoots it and may stop at a bound.
+/// Adam's β₁ when `optimizer.beta1` is absent: the value the caustic and
+/// glass box problems needed (with 0.9 a light or a block that reaches its
+/// place at full speed overshoots it and may stop at a bound;
+/// `docs/suite.md`); the shipped set over seeds 1–3 is measured with it.
 pub const BETA1: f64 = 0.5;
 
 /// The first learning rate of a parameter is `CROSSING × scale /
