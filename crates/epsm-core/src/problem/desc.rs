@@ -149,8 +149,9 @@ pub struct OptimizerDesc {
     pub decay: Option<f64>,
     /// Adam β₁.
     pub beta1: f64,
-    /// Adam β₂.
-    pub beta2: f64,
+    /// Adam β₂ (absent: automatic, 0.9 when every parameter is a material
+    /// value, else 0.999).
+    pub beta2: Option<f64>,
     /// Fraction of the iterations run with L2 at the end (hybrid schedule;
     /// absent: switch when the OT phase stops improving).
     pub l2_fraction: Option<f64>,
@@ -169,7 +170,7 @@ impl Default for OptimizerDesc {
             lr: None,
             decay: None,
             beta1: super::auto::BETA1,
-            beta2: 0.999,
+            beta2: None,
             l2_fraction: None,
             stop: false,
             seed: 1,

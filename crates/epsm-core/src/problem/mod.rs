@@ -111,8 +111,8 @@ pub struct OptimizerSettings {
     pub decay: Option<f64>,
     /// Adam β₁.
     pub beta1: f64,
-    /// Adam β₂.
-    pub beta2: f64,
+    /// Adam β₂; `None`: automatic ([`auto::beta2`]).
+    pub beta2: Option<f64>,
     /// Fraction of iterations run with L2 at the end; `None`: switch when
     /// the OT phase stops improving ([`crate::schedule::Plateau`]).
     pub l2_fraction: Option<f64>,

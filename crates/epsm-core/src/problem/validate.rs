@@ -202,12 +202,17 @@ pub(super) fn problem(d: &ProblemDesc, file: &Path, locator: &Locator) -> OptRes
             (0.0..1.0).contains(&o.beta1),
             "a number in [0, 1)",
         )?,
-        beta2: unit(
-            "optimizer.beta2",
-            o.beta2,
-            (0.0..1.0).contains(&o.beta2),
-            "a number in [0, 1)",
-        )?,
+        beta2: o
+            .beta2
+            .map(|v| {
+                unit(
+                    "optimizer.beta2",
+                    v,
+                    (0.0..1.0).contains(&v),
+                    "a number in [0, 1)",
+                )
+            })
+            .transpose()?,
         l2_fraction: o
             .l2_fraction
             .map(|v| {

@@ -1,12 +1,16 @@
 //! The best θ of a run, judged on an independent render.
 //!
 //! Every [`Judge::every`] iterations, and at the final θ, the scene is
-//! rendered at the match resolution with [`Judge::spp`] samples per pixel
-//! and a seed of its own that does not change from one evaluation to the
-//! next (common random numbers: two θ are compared under the same noise).
-//! Its loss is the mean squared difference of tone-mapped colours against
-//! the target ([`judged_loss`]); the θ with the lowest is kept ([`Best`]),
-//! reported beside the last and used for the final images.
+//! rendered twice at the match resolution, each with half of [`Judge::spp`]
+//! samples per pixel and a seed of its own that does not change from one
+//! evaluation to the next (common random numbers: two θ are compared under
+//! the same noise). Its loss is the mean product of the two renders'
+//! tone-mapped differences from the target ([`judged_loss`]): unlike the
+//! squared difference of one render, whose expectation adds the render's
+//! variance, and so prefers a θ that renders with less noise (a dimmer
+//! light, a rougher lobe), its expectation is the squared difference of
+//! the expected image. The θ with the lowest is kept ([`Best`]), reported
+//! beside the last and used for the final images.
 
 use epsm_render::Image;
 use serde::{Deserialize, Serialize};
@@ -56,17 +60,24 @@ impl Judge {
     }
 }
 
-/// Mean squared difference of the tone-mapped colours of `image` and
-/// `target` over pixels and channels.
-pub fn judged_loss(image: &Image, target: &Image) -> f64 {
-    let n = (3 * image.pixels.len().max(1)) as f64;
-    let sum: f64 = image
+/// Mean over pixels and channels of `(a − t)(b − t)` for the tone-mapped
+/// colours of two independent renders `a`, `b` of the same θ and of the
+/// `target` `t`: an unbiased estimate of the squared difference between
+/// the expected tone-mapped render and the target (it can be slightly
+/// negative at the optimum). All three images have the same size.
+pub fn judged_loss(a: &Image, b: &Image, target: &Image) -> f64 {
+    let n = (3 * a.pixels.len().max(1)) as f64;
+    let sum: f64 = a
         .pixels
         .iter()
+        .zip(&b.pixels)
         .zip(&target.pixels)
-        .map(|(a, b)| {
+        .map(|((a, b), t)| {
             (0..3)
-                .map(|k| f64::from(tone_map(a[k]) - tone_map(b[k])).powi(2))
+                .map(|k| {
+                    let t = tone_map(t[k]);
+                    f64::from(tone_map(a[k]) - t) * f64::from(tone_map(b[k]) - t)
+                })
                 .sum::<f64>()
         })
         .sum();
@@ -112,9 +123,19 @@ mod tests {
     #[test]
     fn the_judged_loss_compares_tone_mapped_colours() {
         let mut a = Image::new(2, 1);
-        let b = Image::new(2, 1);
-        assert_eq!(judged_loss(&a, &b), 0.0);
+        let t = Image::new(2, 1);
+        assert_eq!(judged_loss(&a, &a, &t), 0.0);
         a.pixels[0] = Vec3::splat(1.0);
-        assert!((judged_loss(&a, &b) - 0.25 * 3.0 / 6.0).abs() < 1e-9);
+        // tone_map(1) = 0.5 in 3 of 6 channels: the squared difference.
+        assert!((judged_loss(&a, &a, &t) - 0.25 * 3.0 / 6.0).abs() < 1e-9);
+        // Two renders scattered to either side of the target: their noise
+        // cancels, where one render's squared difference counts it.
+        let mut b = Image::new(2, 1);
+        b.pixels[0] = Vec3::splat(1.0);
+        let mut t = Image::new(2, 1);
+        t.pixels[0] = Vec3::splat(1.0 / 3.0);
+        a.pixels[0] = Vec3::ZERO;
+        assert!((judged_loss(&a, &b, &t) + 0.0625 * 3.0 / 6.0).abs() < 1e-6);
+        assert!(judged_loss(&a, &a, &t) > 0.0);
     }
 }

@@ -199,7 +199,7 @@ impl Optimization {
                 .collect(),
             decay: o.decay.unwrap_or(1.0),
             beta1: o.beta1,
-            beta2: o.beta2,
+            beta2: o.beta2.unwrap_or(auto::beta2(false)),
             epsilon: 1e-12,
         });
         Ok(Self {
@@ -311,9 +311,12 @@ impl Optimization {
 
     /// The judged loss of the current θ ([`best`]).
     fn judged(&self) -> f64 {
-        let seed = stream_seed(self.problem.optimizer.seed, 0, JUDGE_SALT);
-        let image = render_image(&self.grad.scene, self.judge.spp, seed);
-        best::judged_loss(&image, &self.target_match)
+        let spp = (self.judge.spp / 2).max(1);
+        let [a, b] = [JUDGE_SALT, JUDGE_SALT ^ 1].map(|salt| {
+            let seed = stream_seed(self.problem.optimizer.seed, 0, salt);
+            render_image(&self.grad.scene, spp, seed)
+        });
+        best::judged_loss(&a, &b, &self.target_match)
     }
 
     /// `dL/dθ` at the current θ for the current iteration's loss and paths,
@@ -493,6 +496,18 @@ fn choose(
         problem.loss.flow = Some(camera);
         choices.push(Choice::new("loss.flow", camera.to_string(), why));
     }
+    if problem.optimizer.beta2.is_none() {
+        let material_only = !targets.iter().any(is_geometric);
+        let b = auto::beta2(material_only);
+        problem.optimizer.beta2 = Some(b);
+        let why = if material_only {
+            "every parameter is a material value: L2 throughout, whose gradient shrinks with \
+             the error; a short second-moment memory keeps the late steps long"
+        } else {
+            "a long second-moment memory (geometric parameters)"
+        };
+        choices.push(Choice::new("optimizer.beta2", b.to_string(), why));
+    }
     if problem.optimizer.decay.is_none() {
         let d = auto::decay(n);
         problem.optimizer.decay = Some(d);
@@ -554,8 +569,9 @@ fn choose(
     };
     let judge = Judge::new(n, problem.passes.spp_match.unwrap_or(0), spp_grad);
     let why = format!(
-        "θ judged every {} iterations and at the end on an independent {}-spp render \
-         (tone-mapped L2 against the target); the best is reported and rendered",
+        "θ judged every {} iterations and at the end on two independent renders of {} spp in \
+         all (the product of their tone-mapped differences from the target); the best is \
+         reported and rendered",
         judge.every, judge.spp
     );
     choices.push(Choice::new("best", "judged", why));
