@@ -1,10 +1,6 @@
 //! One module per command.
 
 pub mod bench;
-pub mod bench_manifold;
-pub mod bench_ot;
-pub mod bench_rays;
-pub mod bench_render;
 pub mod check;
 pub mod compare;
 pub mod grad;

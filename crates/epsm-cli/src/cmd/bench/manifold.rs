@@ -55,9 +55,9 @@ type Groups = BTreeMap<(PathKind, usize), Vec<DiffPath>>;
 /// Runs `epsm bench manifold`.
 pub fn run(args: &ManifoldBenchArgs) -> anyhow::Result<()> {
     anyhow::ensure!(
-        (1..=super::check::MAX_SAMPLES).contains(&args.samples),
+        (1..=crate::cmd::check::MAX_SAMPLES).contains(&args.samples),
         "--samples must be in [1, {}], got {}",
-        super::check::MAX_SAMPLES,
+        crate::cmd::check::MAX_SAMPLES,
         args.samples
     );
     anyhow::ensure!(
@@ -65,7 +65,7 @@ pub fn run(args: &ManifoldBenchArgs) -> anyhow::Result<()> {
         "--seconds must be a positive number, got {}",
         args.seconds
     );
-    super::check_threads(args.threads)?;
+    crate::cmd::check_threads(args.threads)?;
     for path in &args.scenes {
         let scene = load_scene(path)?;
         let mut table = ParamTable::new(&scene);
@@ -89,7 +89,7 @@ pub fn run(args: &ManifoldBenchArgs) -> anyhow::Result<()> {
         let settings = SolveSettings::for_radius(scene.radius());
         // Classification (with the projection onto the manifold), timed once.
         let (start, cpu0) = (Instant::now(), cpu_seconds());
-        let classified: Vec<_> = super::with_threads(args.threads, || {
+        let classified: Vec<_> = crate::cmd::with_threads(args.threads, || {
             records
                 .par_iter()
                 .map(|r| classify(r, &scene, &motion, &settings).paths)
@@ -127,7 +127,7 @@ pub fn run(args: &ManifoldBenchArgs) -> anyhow::Result<()> {
             );
         }
         for ((kind, len), paths) in &groups {
-            let m = super::with_threads(args.threads, || {
+            let m = crate::cmd::with_threads(args.threads, || {
                 measure(paths, &motion, &settings, args.seconds)
             })?;
             let row = serde_json::json!({

@@ -207,7 +207,7 @@ pub fn run(
         warm_median_s,
         speedup: cold_median_s / warm_median_s,
         max_loss_rel_diff,
-        peak_rss_mb: super::super::peak_rss_mb(),
+        peak_rss_mb: crate::cmd::peak_rss_mb(),
         threads: rayon::current_num_threads(),
     };
     if json {

@@ -155,7 +155,7 @@ pub fn run(args: &OtBenchArgs) -> anyhow::Result<()> {
         clamped_corrections: result.stats.clamped_corrections,
         auction_budget_stops: result.stats.auction_budget_stops,
         cold_starts: result.stats.cold_starts,
-        peak_rss_mb: super::peak_rss_mb(),
+        peak_rss_mb: crate::cmd::peak_rss_mb(),
         threads: rayon::current_num_threads(),
         phases: result.stats.phases.iter().collect(),
     };

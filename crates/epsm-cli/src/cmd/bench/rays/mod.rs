@@ -156,7 +156,7 @@ struct RaySet {
 
 /// Runs the benchmark.
 pub fn run(args: &RaysBenchArgs) -> anyhow::Result<()> {
-    super::check_threads(args.threads)?;
+    crate::cmd::check_threads(args.threads)?;
     anyhow::ensure!(args.repeat >= 1, "--repeat must be at least 1");
     match &args.scene {
         Some(path) => {

@@ -8,7 +8,7 @@ use std::time::Instant;
 use epsm_render::scene::load::{MAX_DEPTH, load_scene};
 use epsm_render::tracer::{Kernel, RenderOptions, render_with};
 
-use super::bench_rays::cpu_seconds;
+use super::rays::cpu_seconds;
 
 /// Arguments of `epsm bench render`.
 #[derive(clap::Args, Debug)]
@@ -116,7 +116,7 @@ pub fn run(args: &RenderBenchArgs) -> anyhow::Result<()> {
             "kernel": kernel_name,
             "load_and_build_s": load_s,
             "runs": results,
-            "peak_rss_mb": super::peak_rss_mb(),
+            "peak_rss_mb": crate::cmd::peak_rss_mb(),
         });
         if args.json {
             println!("{report}");
