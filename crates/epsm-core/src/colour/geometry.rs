@@ -29,9 +29,10 @@
 //! constant; the escaped radiance leaves the last vertex along its recorded
 //! world direction ([`PathRecord::escape_dir`]), so that vertex's factor
 //! changes with its motion while the background it sees is held fixed, as
-//! for a next-event connection to the background. Delta (specular) vertices: with the camera-ray convention the
-//! vertex after a mirror or glass interface stays on the scattered ray and
-//! the lobe's Fresnel weight changes with `cos θi` (`chain.rs`); with the
+//! for a next-event connection to the background. Delta (specular)
+//! vertices: with the camera-ray convention the vertex after a mirror or
+//! glass interface stays on the scattered ray and the lobe's Fresnel
+//! weight changes with `cos θi` (`chain.rs`); with the
 //! attached convention their motion is the manifold's (carried by `dp/dθ`),
 //! so terms past a delta vertex whose neighbourhood moves are left out for
 //! that parameter and counted ([`DropReason::NotDifferentiable`]).
