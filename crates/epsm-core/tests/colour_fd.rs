@@ -26,12 +26,11 @@ use std::path::Path;
 use epsm_core::ParamTable;
 use epsm_core::backprop::{PassInput, backprop, record_level};
 use epsm_core::colour::{ColourModel, PrimaryMotion};
-use epsm_core::loss::{LossEval, MatchGuards};
+use epsm_core::loss::{LossKind, evaluate};
 use epsm_core::schedule::PathUse;
 use epsm_render::scene::load::parts_from_str;
 use epsm_render::tracer::{RenderOptions, render, render_recorded};
 use epsm_render::{Image, Scene};
-use glam::{DVec2, Vec3};
 
 /// Independent renders (seeds) averaged into one image.
 const CHUNKS: u32 = 16;
@@ -243,36 +242,24 @@ impl Setup {
     /// The mean of [`CHUNKS`] independent renders at `theta`.
     fn image(&mut self, theta: &[f64], spp: u32) -> Image {
         self.set(theta);
-        let mut sum: Option<Image> = None;
-        for chunk in 0..CHUNKS {
-            let img = render(&self.scene, &self.options(spp, chunk), &|_| {}).image;
-            match &mut sum {
-                None => sum = Some(img),
-                Some(s) => {
-                    assert_eq!(s.pixels.len(), img.pixels.len());
-                    for (a, b) in s.pixels.iter_mut().zip(&img.pixels) {
-                        *a += *b;
-                    }
-                }
+        let chunk = |c| render(&self.scene, &self.options(spp, c), &|_| {}).image;
+        let mut mean = chunk(0);
+        for c in 1..CHUNKS {
+            let img = chunk(c);
+            assert_eq!(mean.pixels.len(), img.pixels.len());
+            for (a, b) in mean.pixels.iter_mut().zip(&img.pixels) {
+                *a += *b;
             }
         }
-        let mut mean = sum.expect("at least one chunk");
         let n = CHUNKS as f32;
         mean.pixels.iter_mut().for_each(|c| *c /= n);
         mean
     }
 }
 
-/// `Σ_pixels |c − t|²` over the pixel count, in `f64`.
-fn l2(image: &Image, target: &Image) -> f64 {
-    assert_eq!(image.pixels.len(), target.pixels.len());
-    image
-        .pixels
-        .iter()
-        .zip(&target.pixels)
-        .map(|(c, t)| f64::from((*c - *t).length_squared()))
-        .sum::<f64>()
-        / image.pixels.len() as f64
+/// The optimizer's L2 loss of `image` against `target`.
+fn l2(image: &Image, target: &Image) -> epsm_core::loss::LossEval {
+    evaluate(LossKind::L2, image, target, 1.0, None).expect("finite images of one size")
 }
 
 /// The analytic L2 gradient at the file values and the central difference
@@ -283,24 +270,11 @@ fn compare(case: &Case) -> Vec<f64> {
     let truth: Vec<f64> = base.iter().zip(case.offsets).map(|(b, o)| b + o).collect();
     let target = s.image(&truth, 4 * case.spp);
     let image = s.image(&base, case.spp);
-    let npix = image.pixels.len();
-    // ∂L/∂c per pixel of each chunk's image (the image is their mean).
-    let g_rgb: Vec<Vec3> = image
-        .pixels
-        .iter()
-        .zip(&target.pixels)
-        .map(|(c, t)| 2.0 * (*c - *t) / (npix as f32 * CHUNKS as f32))
-        .collect();
     s.set(&base);
-    let loss = LossEval {
-        value: l2(&image, &target),
-        width: image.width,
-        height: image.height,
-        g_rgb,
-        g_xy: vec![DVec2::ZERO; npix],
-        matched: None,
-        guards: MatchGuards::default(),
-    };
+    // ∂L/∂c per pixel of each chunk's image (the image is their mean).
+    let mut loss = l2(&image, &target);
+    let n = CHUNKS as f32;
+    loss.g_rgb.iter_mut().for_each(|g| *g /= n);
     let colour = ColourModel::new(&s.table, &s.scene, Some(PrimaryMotion::OnCameraRay));
     let level = record_level(&s.table, &s.scene, &colour, PathUse::ColourOnly);
     let mut analytic = vec![0.0; base.len()];
@@ -328,7 +302,7 @@ fn compare(case: &Case) -> Vec<f64> {
         let mut at = |x: f64| {
             let mut t = base.clone();
             t[k] = x;
-            l2(&s.image(&t, case.spp), &target)
+            l2(&s.image(&t, case.spp), &target).value
         };
         let fd = (at(base[k] + h) - at(base[k] - h)) / (2.0 * h);
         let error = ((analytic[k] - fd) / fd).abs();
