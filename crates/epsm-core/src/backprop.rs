@@ -152,6 +152,7 @@ pub fn backprop(input: &PassInput<'_>, records: &[PathRecord]) -> (Vec<f64>, Pas
             })
         })
         .collect();
+    let classified = drop_umbra(records, classified, input.loss.width, pixel_of);
     let mut mass = vec![0.0f64; input.loss.g_xy.len()];
     for (r, c) in records.iter().zip(&classified) {
         if let Some(m) = mass.get_mut(pixel_of(r)) {
@@ -222,6 +223,82 @@ pub fn backprop(input: &PassInput<'_>, records: &[PathRecord]) -> (Vec<f64>, Pas
         stats.merge(&o.stats);
     }
     (grad, stats)
+}
+
+/// A light as the shadows' visibility test tells lights apart: an emissive
+/// object, or a point light.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+enum LightKey {
+    Area(u32),
+    Point(u32),
+}
+
+/// The light a recorded connection reached.
+fn connection_light(c: &epsm_render::record::ConnectionRecord) -> Option<LightKey> {
+    match c.light {
+        epsm_render::lights::LightPoint::Area { object, .. } => Some(LightKey::Area(object)),
+        epsm_render::lights::LightPoint::Point { index } => Some(LightKey::Point(index)),
+        epsm_render::lights::LightPoint::Background => None,
+    }
+}
+
+/// The light a shadow path ends at.
+fn shadow_light(path: &DiffPath) -> Option<LightKey> {
+    match path.nodes.last()? {
+        crate::paths::Node::Surface { anchor, .. } => Some(LightKey::Area(anchor.object)),
+        crate::paths::Node::PointLight(i) => Some(LightKey::Point(*i as u32)),
+        crate::paths::Node::Camera => None,
+    }
+}
+
+/// Pixels (match resolution) within this many of an unblocked connection
+/// to a light keep their shadow paths toward it.
+const UMBRA_RADIUS: i64 = 2;
+
+/// Drops (and counts, as `not_differentiable`) the shadow paths of pixels
+/// deep in an umbra: no sample within [`UMBRA_RADIUS`] pixels reached the
+/// same light unblocked from its first vertex. Moving such a shadow changes
+/// no pixel near it, yet its path would take the pixel's OT gradient.
+fn drop_umbra(
+    records: &[PathRecord],
+    mut classified: Vec<Option<Classified>>,
+    width: u32,
+    pixel_of: impl Fn(&PathRecord) -> usize,
+) -> Vec<Option<Classified>> {
+    let mut lit = std::collections::HashSet::new();
+    for r in records {
+        for c in r
+            .connections
+            .iter()
+            .filter(|c| c.vertex == 0 && c.occluder.is_none())
+        {
+            if let Some(l) = connection_light(c) {
+                lit.insert((pixel_of(r), l));
+            }
+        }
+    }
+    let w = i64::from(width);
+    let near_lit = |px: usize, l: LightKey| {
+        let (x, y) = (px as i64 % w, px as i64 / w);
+        (-UMBRA_RADIUS..=UMBRA_RADIUS).any(|dy| {
+            (-UMBRA_RADIUS..=UMBRA_RADIUS).any(|dx| {
+                let (nx, ny) = (x + dx, y + dy);
+                nx >= 0 && nx < w && ny >= 0 && lit.contains(&((ny * w + nx) as usize, l))
+            })
+        })
+    };
+    for (r, c) in records.iter().zip(classified.iter_mut()) {
+        let Some(c) = c else { continue };
+        let px = pixel_of(r);
+        let before = c.paths.len();
+        c.paths.retain(|p| {
+            p.kind != PathKind::Shadow || shadow_light(p).is_none_or(|l| near_lit(px, l))
+        });
+        for _ in c.paths.len()..before {
+            c.skipped.add(DropReason::NotDifferentiable);
+        }
+    }
+    classified
 }
 
 /// One adjoint solve with `g_xy` pre-divided by the pixel's mass.
