@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Regenerates docs/results.md by running `epsm compare` (methods epsm, drot,
-# l2) on every shipped problem with seeds 1, 2 and 3 (only the epsm binary
-# is used). Usage:
+# l2, prdpt) on every shipped problem with seeds 1, 2 and 3 (only the epsm
+# binary is used). Usage:
 #   scripts/results.sh [EPSM_BINARY] [ITERATIONS] [PROBLEM_NAMES...]
 # e.g. scripts/results.sh target/release/epsm "" caustic mirror layout
 set -euo pipefail
@@ -10,7 +10,8 @@ iterations=${2:-}
 shift $(( $# > 2 ? 2 : $# ))
 names=("$@")
 if [ ${#names[@]} -eq 0 ]; then
-  names=(caustic mirror layout shadow highlight camera material glass-box)
+  names=()
+  for f in scenes/problems/*.toml; do names+=("$(basename "$f" .toml)"); done
 fi
 seeds=(1 2 3)
 rows=$(mktemp)
@@ -18,7 +19,7 @@ csvs=$(mktemp)
 for name in "${names[@]}"; do
   for seed in "${seeds[@]}"; do
     out="out/results/$name-$seed"
-    args=(compare "scenes/problems/$name.toml" --methods epsm,drot,l2 --seed "$seed" --out "$out" --markdown)
+    args=(compare "scenes/problems/$name.toml" --methods epsm,drot,l2,prdpt --seed "$seed" --out "$out" --markdown)
     if [ -n "$iterations" ]; then args+=(--iterations "$iterations"); fi
     "$epsm" "${args[@]}" >> "$rows"
     tail -n +2 "$out/compare.csv" >> "$csvs"
@@ -27,7 +28,7 @@ done
 # compare.csv columns: problem,method,seed,param_error,last_param_error,
 # tolerance,solved,image_rmse,iterations,wall_s,...
 summary=$(
-  for method in epsm drot l2; do
+  for method in epsm drot l2 prdpt; do
     awk -F, -v m="$method" '$2 == m' "$csvs" > "$csvs.$method"
     runs=$(wc -l < "$csvs.$method")
     solved=$(awk -F, '$7 == "yes"' "$csvs.$method" | wc -l)

@@ -26,13 +26,16 @@ pub enum Method {
     Drot,
     /// L2 with colour derivatives only.
     L2,
+    /// The L2 loss smoothed by a Gaussian in parameter space, its gradient
+    /// estimated from forward renders at perturbed θ (`crate::run::prdpt`).
+    Prdpt,
 }
 
 impl Method {
     /// Every method, in report order.
-    pub const ALL: [Method; 3] = [Method::Epsm, Method::Drot, Method::L2];
+    pub const ALL: [Method; 4] = [Method::Epsm, Method::Drot, Method::L2, Method::Prdpt];
 
-    /// The method named `name` (`epsm`, `drot`, `l2`).
+    /// The method named `name` (`epsm`, `drot`, `l2`, `prdpt`).
     pub fn parse(name: &str) -> Option<Method> {
         Method::ALL.into_iter().find(|m| m.name() == name)
     }
@@ -43,7 +46,14 @@ impl Method {
             Method::Epsm => "epsm",
             Method::Drot => "drot",
             Method::L2 => "l2",
+            Method::Prdpt => "prdpt",
         }
+    }
+
+    /// Whether the method runs the problem's OT loss before its switch (the
+    /// `l2` and `prdpt` methods use L2 throughout).
+    pub fn uses_ot(self) -> bool {
+        matches!(self, Method::Epsm | Method::Drot)
     }
 }
 
@@ -58,10 +68,15 @@ pub enum PathUse {
     All,
 }
 
-/// Detects that a loss has stopped improving: its exponential moving
-/// average (weight [`Plateau::SMOOTHING`] on the newest value) has not
-/// fallen by [`Plateau::MIN_GAIN`] (relative) below its best for `window`
-/// observations.
+/// Detects that an optimization has stopped improving: the loss's
+/// exponential moving average (weight [`Plateau::SMOOTHING`] on the newest
+/// value) has not fallen by [`Plateau::MIN_GAIN`] (relative) below its best
+/// for `window` observations, and θ no longer travels in one direction: over
+/// the last `window` steps (each parameter's change in units of its learning
+/// rate) the net move is less than [`Plateau::MAX_DRIFT`] of the path
+/// length. The second test keeps the OT phase while a small effect (a
+/// caustic, a highlight) still pulls θ steadily although the loss of the
+/// whole image hardly changes.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Plateau {
     /// Observations without improvement that make a plateau.
@@ -74,6 +89,10 @@ pub struct Plateau {
     pub best: Option<f64>,
     /// The observation (0-based) that set `best`.
     pub best_at: u32,
+    /// The last `window` steps of θ, in units of each parameter's
+    /// learning rate (oldest first).
+    #[serde(default)]
+    pub steps: std::collections::VecDeque<Vec<f64>>,
 }
 
 impl Plateau {
@@ -81,6 +100,10 @@ impl Plateau {
     pub const SMOOTHING: f64 = 0.3;
     /// The relative fall of the average that counts as an improvement.
     pub const MIN_GAIN: f64 = 0.01;
+    /// The largest ratio of θ's net move to its path length over the
+    /// window that counts as no longer travelling (a random walk of 7
+    /// steps gives about 0.38, a steady move 1).
+    pub const MAX_DRIFT: f64 = 0.5;
 
     /// A detector with no observations.
     pub fn new(window: u32) -> Self {
@@ -90,12 +113,19 @@ impl Plateau {
             average: None,
             best: None,
             best_at: 0,
+            steps: std::collections::VecDeque::new(),
         }
     }
 
-    /// Adds `value`; returns whether the average has now gone `window`
-    /// observations without improving.
-    pub fn observe(&mut self, value: f64) -> bool {
+    /// Adds the loss `value` and θ's `step` that followed it (in units of
+    /// each parameter's learning rate); returns whether the average has now
+    /// gone `window` observations without improving while θ has stopped
+    /// travelling ([`Plateau::drift`]).
+    pub fn observe(&mut self, value: f64, step: &[f64]) -> bool {
+        self.steps.push_back(step.to_vec());
+        while self.steps.len() > self.window as usize {
+            self.steps.pop_front();
+        }
         let a = self.average.map_or(value, |a| {
             Self::SMOOTHING * value + (1.0 - Self::SMOOTHING) * a
         });
@@ -105,7 +135,23 @@ impl Plateau {
             self.best_at = self.seen;
         }
         self.seen += 1;
-        self.seen - self.best_at > self.window
+        self.seen - self.best_at > self.window && self.drift() < Self::MAX_DRIFT
+    }
+
+    /// θ's net move over the last steps divided by their path length (1:
+    /// every step in one direction; 0: no move, or back where it started).
+    pub fn drift(&self) -> f64 {
+        let n = self.steps.front().map_or(0, Vec::len);
+        let net: f64 = (0..n)
+            .map(|k| self.steps.iter().map(|s| s[k]).sum::<f64>().powi(2))
+            .sum::<f64>()
+            .sqrt();
+        let path: f64 = self
+            .steps
+            .iter()
+            .map(|s| s.iter().map(|x| x * x).sum::<f64>().sqrt())
+            .sum();
+        if path > 0.0 { net / path } else { 0.0 }
     }
 }
 
@@ -140,10 +186,10 @@ pub struct Schedule {
 
 impl Schedule {
     /// Ends the OT phase after `fraction` of the `iterations`; L2
-    /// throughout for the `l2` method or an L2 loss.
+    /// throughout for the `l2` and `prdpt` methods or an L2 loss.
     pub fn fixed(method: Method, loss: LossKind, iterations: u32, fraction: f64) -> Self {
         let l2 = (f64::from(iterations) * fraction.clamp(0.0, 1.0)).round() as u32;
-        let at = if method == Method::L2 || !loss.is_ot() {
+        let at = if !method.uses_ot() || !loss.is_ot() {
             0
         } else {
             iterations - l2.min(iterations)
@@ -158,7 +204,7 @@ impl Schedule {
 
     /// Ends the OT phase once its loss has not improved for `window`
     /// iterations, and at the latest after `latest` iterations; L2
-    /// throughout for the `l2` method or an L2 loss.
+    /// throughout for the `l2` and `prdpt` methods or an L2 loss.
     pub fn on_plateau(
         method: Method,
         loss: LossKind,
@@ -166,7 +212,7 @@ impl Schedule {
         window: u32,
         latest: u32,
     ) -> Self {
-        let switch = if method == Method::L2 || !loss.is_ot() {
+        let switch = if !method.uses_ot() || !loss.is_ot() {
             Switch::At(0)
         } else {
             Switch::OnPlateau {
@@ -191,12 +237,13 @@ impl Schedule {
         }
     }
 
-    /// Records the loss of OT iteration `iteration`; decides the switch
-    /// when the loss has reached its plateau or the latest iteration has
-    /// come, so that L2 starts at `iteration + 1`.
-    pub fn observe(&mut self, iteration: u32, loss: f64) {
+    /// Records the loss of OT iteration `iteration` and θ's step after it
+    /// (in units of each parameter's learning rate); decides the switch
+    /// when the optimization has reached its plateau ([`Plateau`]) or the
+    /// latest iteration has come, so that L2 starts at `iteration + 1`.
+    pub fn observe(&mut self, iteration: u32, loss: f64, step: &[f64]) {
         if let Switch::OnPlateau { plateau, latest } = &mut self.switch {
-            let flat = plateau.observe(loss);
+            let flat = plateau.observe(loss, step);
             if flat || iteration + 1 >= *latest {
                 self.switch = Switch::At(iteration + 1);
             }
@@ -220,7 +267,7 @@ impl Schedule {
     /// The paths that give screen-position gradients at `iteration`.
     pub fn paths_at(&self, iteration: u32) -> PathUse {
         match (self.loss_at(iteration).is_ot(), self.method) {
-            (false, _) | (_, Method::L2) => PathUse::ColourOnly,
+            (false, _) | (_, Method::L2 | Method::Prdpt) => PathUse::ColourOnly,
             (true, Method::Drot) => PathUse::PrimaryOnly,
             (true, Method::Epsm) => PathUse::All,
         }
@@ -258,23 +305,29 @@ mod tests {
         let mut i = 0;
         // Falling by 10 % per iteration: no switch.
         while i < 10 {
-            s.observe(i, 0.9f64.powi(i as i32));
+            s.observe(i, 0.9f64.powi(i as i32), &[1.0]);
             i += 1;
         }
         assert_eq!(s.switch(), 40);
-        // Flat from here: the average's lag keeps it improving for several
-        // iterations, then the switch follows the window.
-        while s.switch() == 40 {
-            s.observe(i, 0.9f64.powi(10));
+        // A flat loss while θ still travels one way: no switch either.
+        while i < 20 {
+            s.observe(i, 0.9f64.powi(10), &[0.5]);
             i += 1;
         }
-        assert!((14..=26).contains(&s.switch()), "switch at {}", s.switch());
+        assert_eq!(s.switch(), 40);
+        // Flat, θ back and forth from here: the switch follows the window
+        // (θ's last steps must first turn into a random walk).
+        while s.switch() == 40 {
+            s.observe(i, 0.9f64.powi(10), &[if i % 2 == 0 { 1.0 } else { -1.0 }]);
+            i += 1;
+        }
+        assert!((21..=26).contains(&s.switch()), "switch at {}", s.switch());
         assert!(s.resets_at(s.switch()) && s.loss_at(s.switch()) == LossKind::L2);
         // Still falling at the latest iteration: the switch comes then.
         let mut t = Schedule::on_plateau(Method::Epsm, LossKind::OtExact, 40, 3, 30);
         for i in 0..40 {
             if t.loss_at(i).is_ot() {
-                t.observe(i, 0.8f64.powi(i as i32));
+                t.observe(i, 0.8f64.powi(i as i32), &[1.0]);
             }
         }
         assert_eq!(t.switch(), 30);

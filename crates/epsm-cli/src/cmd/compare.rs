@@ -23,8 +23,8 @@ use super::plots::{Figure, Thumb, plot_figure};
 pub struct CompareArgs {
     /// The problem file (TOML).
     pub problem: PathBuf,
-    /// Comma-separated methods (epsm, drot, l2).
-    #[arg(long, default_value = "epsm,drot,l2", value_delimiter = ',')]
+    /// Comma-separated methods (epsm, drot, l2, prdpt).
+    #[arg(long, default_value = "epsm,drot,l2,prdpt", value_delimiter = ',')]
     pub methods: Vec<String>,
     /// Output folder (default: the problem's `output.dir` + `-compare`).
     #[arg(long)]

@@ -45,7 +45,7 @@ pub struct OptimizeArgs {
     /// Iterations (default: the problem's `optimizer.iterations`).
     #[arg(long)]
     pub iterations: Option<u32>,
-    /// Method: epsm, drot or l2 (default: the problem's `optimizer.method`).
+    /// Method: epsm, drot, l2 or prdpt (default: the problem's `optimizer.method`).
     #[arg(long)]
     pub method: Option<String>,
     /// Seed of the iterations' random streams (default: `optimizer.seed`).
@@ -117,7 +117,7 @@ pub fn apply_overrides(
     }
     if let Some(m) = method {
         problem.optimizer.method = Method::parse(m)
-            .with_context(|| format!("--method `{m}`: expected epsm, drot or l2"))?;
+            .with_context(|| format!("--method `{m}`: expected epsm, drot, l2 or prdpt"))?;
     }
     if let Some(s) = seed {
         problem.optimizer.seed = s;

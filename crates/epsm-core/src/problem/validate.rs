@@ -178,7 +178,10 @@ pub(super) fn problem(d: &ProblemDesc, file: &Path, locator: &Locator) -> OptRes
     let method = Method::parse(&o.method).ok_or_else(|| {
         c.err(
             "optimizer.method",
-            format!("unknown method `{}`; expected epsm, drot or l2", o.method),
+            format!(
+                "unknown method `{}`; expected epsm, drot, l2 or prdpt",
+                o.method
+            ),
         )
     })?;
     let unit = |field: &str, v: f64, ok: bool, what: &str| c.check(field, v, ok, what);

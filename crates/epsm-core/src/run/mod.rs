@@ -39,6 +39,7 @@ pub mod best;
 mod checkpoint;
 mod error;
 pub mod noise;
+pub mod prdpt;
 
 use std::sync::{Mutex, PoisonError};
 use std::time::Instant;
@@ -55,13 +56,14 @@ use noise::Noise;
 
 use crate::backprop::{PassInput, PassStats, backprop, record_level};
 use crate::colour::{ColourModel, PrimaryMotion};
-use crate::loss::{LossEval, add_flow, evaluate, resample, rmse};
+use crate::loss::{LossEval, LossKind, add_flow, evaluate, resample, rmse};
 use crate::optim::{Adam, AdamSettings};
 use crate::params::ParamTable;
 use crate::problem::auto::{self, Choice, is_camera, is_geometric};
 use crate::problem::{LossImage, Problem, Target};
 use crate::report::{Row, Timings, param_error};
 use crate::schedule::{Method, Schedule};
+use prdpt::Smoothing;
 
 /// A scene and its parameter table (one per resolution).
 #[derive(Clone, Debug)]
@@ -130,6 +132,8 @@ pub struct Optimization {
     judge: Judge,
     best: Option<Best>,
     stopped: bool,
+    /// The `prdpt` method's smoothing (`None` for the other methods).
+    smoothing: Option<Smoothing>,
 }
 
 /// Iterations without progress that end the OT phase or (with
@@ -151,6 +155,10 @@ fn stream_seed(seed: u32, iteration: u32, salt: u32) -> u32 {
 
 /// Salt of the judged render's stream (the same at every iteration).
 const JUDGE_SALT: u32 = 0x0B35_7E11;
+
+/// Salt of the `prdpt` method's perturbations; pair `i`'s renders use
+/// `PRDPT_SALT + 1 + i`.
+const PRDPT_SALT: u32 = 0x09D0_0000;
 
 impl Optimization {
     /// Sets up `problem` (renders the target when it is given by true
@@ -186,6 +194,8 @@ impl Optimization {
         let mut choices = Vec::new();
         let (schedule, judge) = choose(&mut problem, &grad, &target_match, &mut choices);
         let o = &problem.optimizer;
+        let smoothing = (o.method == Method::Prdpt)
+            .then(|| Smoothing::new(&problem.params, o.iterations, o.decay.unwrap_or(1.0)));
         let adam = Adam::new(AdamSettings {
             lr: problem.params.iter().map(|p| p.lr).collect(),
             bounds: problem
@@ -220,6 +230,7 @@ impl Optimization {
             judge,
             best: None,
             stopped: false,
+            smoothing,
         })
     }
 
@@ -321,7 +332,12 @@ impl Optimization {
 
     /// `dL/dθ` at the current θ for the current iteration's loss and paths,
     /// and the records it used.
+    /// With the `prdpt` method, the gradient of the smoothed L2 loss
+    /// ([`prdpt`]) and no records.
     pub fn gradient(&self) -> OptResult<(GradientEval, Vec<PathRecord>)> {
+        if let Some(smoothing) = &self.smoothing {
+            return Ok((self.smoothed_gradient(smoothing)?, Vec::new()));
+        }
         let use_ = self.schedule.paths_at(self.iteration);
         let l2 = !self.schedule.loss_at(self.iteration).is_ot();
         let colour = ColourModel::new(
@@ -383,6 +399,51 @@ impl Optimization {
         ))
     }
 
+    /// The `prdpt` method's gradient: [`prdpt::PAIRS`] antithetic pairs of
+    /// forward renders at the match resolution, `render.spp_grad` samples
+    /// each, and the L2 loss of a render at θ for the row.
+    fn smoothed_gradient(&self, smoothing: &Smoothing) -> OptResult<GradientEval> {
+        let t0 = Instant::now();
+        let spp = self.problem.passes.spp_grad;
+        let lambda = self.problem.loss.lambda;
+        let sigma = smoothing.sigma(self.iteration);
+        let eps = prdpt::perturbations(self.theta.len(), u64::from(self.seed(PRDPT_SALT)));
+        let mut view = self.grad.clone();
+        let mut losses = Vec::with_capacity(eps.len());
+        for (i, e) in (0u32..).zip(&eps) {
+            let seed = self.seed(PRDPT_SALT + 1 + i);
+            let mut pair = [0.0; 2];
+            for (l, sign) in pair.iter_mut().zip([1.0, -1.0]) {
+                let mut theta: Vec<f64> = (self.theta.iter().zip(e).zip(&sigma))
+                    .map(|((t, ek), sk)| t + sign * sk * ek)
+                    .collect();
+                self.adam.clamp(&mut theta);
+                view.set(&theta);
+                let image = render_image(&view.scene, spp, seed);
+                *l = evaluate(LossKind::L2, &image, &self.target_match, lambda, None)?.value;
+            }
+            losses.push((pair[0], pair[1]));
+        }
+        let image = render_image(&self.grad.scene, spp, self.seed(0));
+        let loss = evaluate(LossKind::L2, &image, &self.target_match, lambda, None)?;
+        let traced = u64::from(spp) * u64::from(image.width * image.height);
+        Ok(GradientEval {
+            grad: prdpt::estimate(&eps, &losses, &sigma),
+            loss,
+            image,
+            stats: PassStats {
+                traced: traced * (2 * eps.len() as u64 + 1),
+                ..PassStats::default()
+            },
+            timings: Timings {
+                primal: 0.0,
+                trace: t0.elapsed().as_secs_f64(),
+                matching: 0.0,
+                solve: 0.0,
+            },
+        })
+    }
+
     /// Runs one iteration and returns its row.
     pub fn step(&mut self) -> OptResult<Row> {
         let t0 = Instant::now();
@@ -430,9 +491,12 @@ impl Optimization {
             let key = self.problem.params.get(e.param).map(|p| p.key.clone());
             OptimizeError::NonFiniteGradient(key.unwrap_or_else(|| e.param.to_string()))
         })?;
+        let step: Vec<f64> = (theta.iter().zip(&self.theta).zip(&self.problem.params))
+            .map(|((new, old), p)| (new - old) / p.lr)
+            .collect();
         self.set_theta(&theta);
         if ot {
-            self.schedule.observe(self.iteration, g.loss.value);
+            self.schedule.observe(self.iteration, g.loss.value, &step);
         }
         self.iteration += 1;
         self.stopped = self.converged();
@@ -547,7 +611,7 @@ fn choose(
     }
     let o = &problem.optimizer;
     let kind = problem.loss.kind;
-    let ot = o.method != Method::L2 && kind.is_ot();
+    let ot = o.method.uses_ot() && kind.is_ot();
     let schedule = match o.l2_fraction {
         Some(f) => Schedule::fixed(o.method, kind, n, f),
         None if ot && !targets.iter().any(is_geometric) => {
