@@ -69,6 +69,8 @@ pub struct Summary {
     pub last_param_error: Option<f64>,
     /// The iteration whose θ was judged best.
     pub best_iteration: u32,
+    /// How many iterates the best θ is the mean of (0: one iterate).
+    pub best_averaged: u32,
     /// The problem's tolerance on the parameter error.
     pub tolerance: Option<f64>,
     /// Whether the best θ's parameter error is within the tolerance (when
@@ -149,19 +151,29 @@ pub fn run(args: &OptimizeArgs) -> anyhow::Result<()> {
     let error = |e: Option<f64>| e.map_or("n/a".into(), |e| format!("{e:.4}"));
     println!(
         "{}: {} iterations in {:.1} s, image RMSE {:.4}, parameter error {} \
-         (best θ, iteration {}; last θ {}), tolerance {}, solved: {} -> {}",
+         (best θ, {}; last θ {}), tolerance {}, solved: {} -> {}",
         args.problem.display(),
         s.iterations,
         s.wall_s,
         s.image_rmse,
         error(s.param_error),
-        s.best_iteration,
+        best_origin(s.best_iteration, s.best_averaged),
         error(s.last_param_error),
         error(s.tolerance),
         solved_word(s.solved),
         out.display()
     );
     Ok(())
+}
+
+/// Where the best θ comes from: `iteration 12`, or `mean of the last 10
+/// iterates`.
+pub fn best_origin(iteration: u32, averaged: u32) -> String {
+    if averaged > 0 {
+        format!("mean of the last {averaged} iterates")
+    } else {
+        format!("iteration {iteration}")
+    }
 }
 
 /// `yes`, `no` or `n/a` (no tolerance or no true values).
@@ -177,18 +189,19 @@ pub fn solved_word(solved: Option<bool>) -> &'static str {
 fn summary_csv(keys: &[String], s: &Summary, best: &[f64], last: &[f64]) -> String {
     let number = |x: Option<f64>| x.map(|e| format!("{e:e}")).unwrap_or_default();
     let mut out = String::from(
-        "iterations,wall_s,image_rmse,best_iteration,best_param_error,last_param_error,tolerance,solved",
+        "iterations,wall_s,image_rmse,best_iteration,best_averaged,best_param_error,last_param_error,tolerance,solved",
     );
     for k in keys {
         let _ = write!(out, ",best {k},last {k}");
     }
     let _ = write!(
         out,
-        "\n{},{:.3},{:e},{},{},{},{},{}",
+        "\n{},{:.3},{:e},{},{},{},{},{},{}",
         s.iterations,
         s.wall_s,
         s.image_rmse,
         s.best_iteration,
+        s.best_averaged,
         number(s.param_error),
         number(s.last_param_error),
         number(s.tolerance),
@@ -296,9 +309,10 @@ pub fn optimize(
     bar.finish_and_clear();
     opt.save_checkpoint(&checkpoint)?;
     let last = opt.theta().to_vec();
-    let (best, best_iteration) = opt.best().map_or((last.clone(), opt.iteration()), |b| {
-        (b.theta.clone(), b.iteration)
-    });
+    let (best, best_iteration, best_averaged) =
+        opt.best().map_or((last.clone(), opt.iteration(), 0), |b| {
+            (b.theta.clone(), b.iteration, b.averaged)
+        });
     let wall_s = opt.checkpoint().wall_s;
     opt.set_theta(&best);
     let final_image = opt.render(preview_spp);
@@ -319,6 +333,7 @@ pub fn optimize(
         param_error: best_error,
         last_param_error: param_error(&last, &truth),
         best_iteration,
+        best_averaged,
         tolerance,
         solved: best_error.zip(tolerance).map(|(e, t)| e <= t),
         image_rmse: epsm_core::loss::rmse(&final_image, opt.target()),

@@ -156,6 +156,10 @@ fn stream_seed(seed: u32, iteration: u32, salt: u32) -> u32 {
 /// Salt of the judged render's stream (the same at every iteration).
 const JUDGE_SALT: u32 = 0x0B35_7E11;
 
+/// The final comparison of the best θ with the tail mean takes this many
+/// times the judge's samples.
+const FINAL_JUDGE_FACTOR: u32 = 4;
+
 /// Salt of the `prdpt` method's perturbations; pair `i`'s renders use
 /// `PRDPT_SALT + 1 + i`.
 const PRDPT_SALT: u32 = 0x09D0_0000;
@@ -322,7 +326,12 @@ impl Optimization {
 
     /// The judged loss of the current θ ([`best`]).
     fn judged(&self) -> f64 {
-        let spp = (self.judge.spp / 2).max(1);
+        self.judged_at(self.judge.spp)
+    }
+
+    /// The judged loss of the current θ with `spp` samples in all.
+    fn judged_at(&self, spp: u32) -> f64 {
+        let spp = (spp / 2).max(1);
         let [a, b] = [JUDGE_SALT, JUDGE_SALT ^ 1].map(|salt| {
             let seed = stream_seed(self.problem.optimizer.seed, 0, salt);
             render_image(&self.grad.scene, spp, seed)
@@ -500,12 +509,53 @@ impl Optimization {
         }
         self.iteration += 1;
         self.stopped = self.converged();
+        self.rows.push(row.clone());
         if self.is_done() {
             let loss = self.judged();
             Best::offer(&mut self.best, self.iteration, &self.theta, loss);
+            self.offer_tail_mean();
         }
-        self.rows.push(row.clone());
         Ok(row)
+    }
+
+    /// Compares the mean θ of the L2 phase's last iterations (at most a
+    /// quarter of the run, the final θ included; [`best::tail_mean`]) with
+    /// the best θ so far under a finer judge ([`FINAL_JUDGE_FACTOR`] times
+    /// the samples: near the optimum the two differ by less than the
+    /// regular judge's noise) and keeps the better. θ is left at the final
+    /// iterate.
+    fn offer_tail_mean(&mut self) {
+        let quarter = self.schedule.iterations.div_ceil(4);
+        let from = self
+            .schedule
+            .switch()
+            .max(self.iteration.saturating_sub(quarter));
+        let iterates: Vec<&[f64]> = (self.rows.iter())
+            .filter(|r| r.iteration >= from)
+            .map(|r| r.theta.as_slice())
+            .chain([self.theta.as_slice()])
+            .collect();
+        let averaged = iterates.len() as u32;
+        let Some(mean) = best::tail_mean(&iterates) else {
+            return;
+        };
+        let last = self.theta.clone();
+        let fine = self.judge.spp * FINAL_JUDGE_FACTOR;
+        if let Some(b) = self.best.clone() {
+            self.set_theta(&b.theta);
+            self.best = Some(Best {
+                loss: self.judged_at(fine),
+                ..b
+            });
+        }
+        self.set_theta(&mean);
+        let loss = self.judged_at(fine);
+        if Best::offer(&mut self.best, self.iteration, &self.theta, loss)
+            && let Some(b) = self.best.as_mut()
+        {
+            b.averaged = averaged;
+        }
+        self.set_theta(&last);
     }
 
     /// Whether `optimizer.stop` ends the run now: the judged loss has not
