@@ -134,6 +134,8 @@ pub struct Optimization {
     stopped: bool,
     /// The `prdpt` method's smoothing (`None` for the other methods).
     smoothing: Option<Smoothing>,
+    /// Whether independent stages run at the same time ([`Optimization::set_overlap`]).
+    overlap: bool,
 }
 
 /// Iterations without progress that end the OT phase or (with
@@ -235,6 +237,7 @@ impl Optimization {
             best: None,
             stopped: false,
             smoothing,
+            overlap: true,
         })
     }
 
@@ -362,11 +365,17 @@ impl Optimization {
             seed: self.seed(0),
             ..RenderOptions::from_scene(&self.grad.scene)
         };
-        let (out, records) = render_recorded(&self.grad.scene, &opts, level, &|_| {});
-        let image = match self.problem.passes.loss_image(!l2) {
-            LossImage::GradientPass => out.image.clone(),
-            LossImage::Independent(spp) => render_image(&self.grad.scene, spp, self.seed(2)),
-        };
+        let loss_image = self.problem.passes.loss_image(!l2);
+        let ((out, records), independent) = self.maybe_join(
+            || render_recorded(&self.grad.scene, &opts, level, &|_| {}),
+            || match loss_image {
+                LossImage::GradientPass => None,
+                LossImage::Independent(spp) => {
+                    Some(render_image(&self.grad.scene, spp, self.seed(2)))
+                }
+            },
+        );
+        let image = independent.unwrap_or_else(|| out.image.clone());
         let t1 = Instant::now();
         let kind = self.schedule.loss_at(self.iteration);
         let warm = &mut *self.warm.lock().unwrap_or_else(PoisonError::into_inner);
@@ -453,16 +462,43 @@ impl Optimization {
         })
     }
 
+    /// Whether independent stages of an iteration run at the same time
+    /// (default on): the primal render beside the gradient pass, and the
+    /// loss's independent render beside the recorded trace. Either way the
+    /// results are the same bit for bit (every stream is seeded); off, the
+    /// stages run one after the other, as `epsm bench iteration` compares.
+    pub fn set_overlap(&mut self, on: bool) {
+        self.overlap = on;
+    }
+
+    /// Runs `a` and `b`, at the same time when overlap is on.
+    fn maybe_join<A: Send, B: Send>(
+        &self,
+        a: impl FnOnce() -> A + Send,
+        b: impl FnOnce() -> B + Send,
+    ) -> (A, B) {
+        if self.overlap {
+            rayon::join(a, b)
+        } else {
+            (a(), b())
+        }
+    }
+
     /// Runs one iteration and returns its row.
     pub fn step(&mut self) -> OptResult<Row> {
-        let t0 = Instant::now();
-        let image = render_image(
-            &self.primal.scene,
-            self.problem.passes.spp_primal,
-            self.seed(1),
+        let ((image, primal), gradient) = self.maybe_join(
+            || {
+                let t0 = Instant::now();
+                let image = render_image(
+                    &self.primal.scene,
+                    self.problem.passes.spp_primal,
+                    self.seed(1),
+                );
+                (image, t0.elapsed().as_secs_f64())
+            },
+            || self.gradient(),
         );
-        let primal = t0.elapsed().as_secs_f64();
-        let (g, _) = self.gradient()?;
+        let (g, _) = gradient?;
         if self.schedule.resets_at(self.iteration) {
             self.adam.reset();
         }

@@ -1,6 +1,7 @@
 //! `epsm bench`: performance measurements printed as text or JSON, one
 //! module per benchmark.
 
+pub mod iteration;
 pub mod manifold;
 pub mod ot;
 pub mod rays;
@@ -19,6 +20,10 @@ pub enum BenchCommand {
     /// Optimal-transport matching of two synthetic RGBXY images (coloured
     /// blobs on a noisy background): seconds, loss, marginal error, memory.
     Ot(ot::OtBenchArgs),
+    /// Seconds of one optimization iteration of a problem, split into its
+    /// stages (primal render, trace, matching, solves), serial and
+    /// overlapped.
+    Iteration(iteration::IterationBenchArgs),
 }
 
 /// Runs one benchmark.
@@ -28,5 +33,6 @@ pub fn run(cmd: &BenchCommand) -> anyhow::Result<()> {
         BenchCommand::Manifold(a) => manifold::run(a),
         BenchCommand::Rays(a) => rays::run(a),
         BenchCommand::Ot(a) => ot::run(a),
+        BenchCommand::Iteration(a) => iteration::run(a),
     }
 }
