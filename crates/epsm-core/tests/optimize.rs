@@ -312,3 +312,39 @@ fn a_checkpoint_that_does_not_fit_the_problem_is_rejected_naming_the_field() {
         .resume(&path, read)
         .expect("the unedited checkpoint resumes");
 }
+
+#[test]
+fn overlapped_and_serial_iterations_follow_the_same_trajectory() {
+    let mut p = tiny(TRANSLATE);
+    p.passes.spp_match = Some(4);
+    p.optimizer.iterations = 4;
+    let run = |overlap: bool| {
+        let mut opt = Optimization::new(p.clone()).expect("setup");
+        opt.set_overlap(overlap);
+        let mut rows = Vec::new();
+        while !opt.is_done() {
+            let r = opt.step().expect("iteration");
+            rows.push((r.loss.to_bits(), r.image_rmse.to_bits(), r.theta));
+        }
+        rows
+    };
+    let (serial, overlapped) = (run(false), run(true));
+    assert_eq!(serial.len(), 4);
+    assert_eq!(serial, overlapped);
+}
+
+#[test]
+fn prdpt_moves_a_translation_toward_the_truth() {
+    // Starting where the box still overlaps its target: PRDPT's smoothing
+    // (0.1 of the scale its step size implies, 0.4 here) reaches it.
+    let mut p = tiny(&TRANSLATE.replace("initial = 0.7", "initial = 0.3"));
+    p.optimizer.method = epsm_core::Method::Prdpt;
+    p.optimizer.iterations = 12;
+    let mut opt = Optimization::new(p).expect("setup");
+    while !opt.is_done() {
+        let row = opt.step().expect("iteration");
+        assert_eq!(row.paths[1], 0, "no manifold solves");
+    }
+    let last = opt.theta()[0].abs();
+    assert!(last < 0.3 * 0.5, "error 0.3 -> {last}");
+}
