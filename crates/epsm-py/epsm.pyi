@@ -84,6 +84,9 @@ class Problem:
         """The problem-file text of a problem built in Python."""
     @property
     def target(self) -> Optional[npt.NDArray[np.float32]]: ...
+    def with_settings(self, **sections: Mapping[str, Any]) -> "Problem":
+        """The same problem with tables replaced key by key
+        (`optimizer={"seed": 2, "method": "drot"}`)."""
 
 def load_problem(path: _Path) -> Problem:
     """Reads and checks a problem file; raises EpsmError naming the field."""
@@ -111,7 +114,8 @@ class Optimization:
     @property
     def choices(self) -> List[Tuple[str, str, str]]: ...
     @property
-    def best_theta(self) -> Optional[List[float]]: ...
+    def best(self) -> Optional[Dict[str, Any]]:
+        """The best judged θ: iteration, theta, judged_loss, param_error."""
     @property
     def target(self) -> npt.NDArray[np.float32]: ...
     def render(self, spp: int = 16) -> npt.NDArray[np.float32]: ...

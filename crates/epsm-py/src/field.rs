@@ -16,6 +16,9 @@ use crate::error::{invalid, to_py};
 use crate::image::per_pixel;
 use crate::scene::Scene;
 
+/// The motion field `(H, W, 2)` and the path counts by kind.
+type Field<'py> = (Bound<'py, PyArray3<f64>>, BTreeMap<&'static str, u64>);
+
 /// motion_field(scene, key, spp=16, seed=None) -> (numpy.ndarray, dict)
 ///
 /// The screen-space motion dp/dθ of parameter `key` at the scene's current
@@ -32,7 +35,7 @@ pub fn motion_field<'py>(
     key: &str,
     spp: u32,
     seed: Option<u32>,
-) -> PyResult<(Bound<'py, PyArray3<f64>>, BTreeMap<&'static str, u64>)> {
+) -> PyResult<Field<'py>> {
     if spp == 0 {
         return Err(invalid("spp", "expected at least 1 sample per pixel"));
     }

@@ -1,12 +1,12 @@
 //! The Python module `epsm`: a thin layer over `epsm-core`, `epsm-render`
 //! and `epsm-ot` (no mathematics of its own).
 //!
-//! - [`scene`]: `load_scene`, `Scene.render/set/get`;
-//! - [`problem`]: `load_problem`, `Problem(scene, params, target, ...)`;
-//! - [`optimization`]: `Optimization.step/gradient/loss/theta/checkpoint/restore`;
-//! - [`field`]: `motion_field`; [`matching`]: `match`;
-//! - [`image`]: `read_image`, `write_image` and the array conversions;
-//! - [`error`]: `EpsmError`, carrying the file, line, field and message.
+//! - [`scene`] — `load_scene`, `Scene.render/set/get`;
+//! - [`problem`] — `load_problem`, `Problem(scene, params, target, ...)`;
+//! - [`optimization`] — `Optimization.step/gradient/loss/theta/checkpoint/restore`;
+//! - [`field`] — `motion_field`; [`matching`] — `match`;
+//! - [`image`] — `read_image`, `write_image` and the array conversions;
+//! - [`error`] — `EpsmError`, carrying the file, line, field and message.
 //!
 //! ## Conventions
 //! - Images are NumPy arrays `(H, W, 3)`, linear RGB, row 0 at the top;

@@ -4,11 +4,12 @@
 
 use std::path::PathBuf;
 
-use epsm_core::report::write_atomic;
+use epsm_core::report::{param_error, write_atomic};
 use epsm_core::schedule::Method;
 use epsm_core::{Checkpoint, OptimizeError};
 use numpy::{IntoPyArray, PyArray1, PyArray3};
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 
 use crate::error::{invalid, to_py};
 use crate::image::to_array;
@@ -160,10 +161,27 @@ impl Optimization {
             .collect()
     }
 
-    /// The best judged θ so far (None before the first judgement).
+    /// The θ with the lowest judged loss so far, as `{"iteration",
+    /// "theta", "judged_loss", "param_error"}` (param_error None without
+    /// true values); None before the first judgement.
     #[getter]
-    fn best_theta(&self) -> Option<Vec<f64>> {
-        self.opt.best().map(|b| b.theta.clone())
+    fn best<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        let Some(b) = self.opt.best() else {
+            return Ok(None);
+        };
+        let truth: Vec<Option<f64>> = self
+            .opt
+            .problem()
+            .params
+            .iter()
+            .map(|p| p.true_value)
+            .collect();
+        let out = PyDict::new(py);
+        out.set_item("iteration", b.iteration)?;
+        out.set_item("theta", b.theta.clone())?;
+        out.set_item("judged_loss", b.loss)?;
+        out.set_item("param_error", param_error(&b.theta, &truth))?;
+        Ok(Some(out))
     }
 
     /// The target image (H, W, 3), linear RGB.

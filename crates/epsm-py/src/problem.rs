@@ -2,7 +2,7 @@
 //! in Python as the same file would be written (docs/problem-format.md),
 //! so that both are checked by the same code with the same located errors.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use epsm_render::Image;
 use numpy::PyArray3;
@@ -22,10 +22,12 @@ const BUILT: &str = "<python problem>";
 pub enum Source {
     /// A problem file.
     File(PathBuf),
-    /// Problem-file text (its scene file absolute) and a target image.
+    /// Problem-file text and a target image.
     Text {
         /// The TOML text.
         text: String,
+        /// The file it names in errors and resolves relative paths against.
+        file: PathBuf,
         /// The target, row-major linear RGB `[width, height, r, g, b, ...]`.
         target: Option<(u32, u32, Vec<f32>)>,
     },
@@ -36,11 +38,14 @@ impl Source {
     pub fn load(&self) -> epsm_core::OptResult<epsm_core::Problem> {
         match self {
             Source::File(path) => epsm_core::load_problem(path),
-            Source::Text { text, target: None } => {
-                epsm_core::problem_from_str(text, Path::new(BUILT))
-            }
             Source::Text {
                 text,
+                file,
+                target: None,
+            } => epsm_core::problem_from_str(text, file),
+            Source::Text {
+                text,
+                file,
                 target: Some((width, height, values)),
             } => {
                 let pixels = values.chunks_exact(3).map(glam::Vec3::from_slice).collect();
@@ -49,7 +54,7 @@ impl Source {
                     height: *height,
                     pixels,
                 };
-                epsm_core::problem_with_target(text, Path::new(BUILT), image)
+                epsm_core::problem_with_target(text, file, image)
             }
         }
     }
@@ -112,10 +117,10 @@ impl Problem {
         sections: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
         let mut file = serde_json::Map::new();
-        if let Some(s) = sections {
-            if let serde_json::Value::Object(map) = json(py, s.as_any(), "sections")? {
-                file.extend(map);
-            }
+        if let Some(s) = sections
+            && let serde_json::Value::Object(map) = json(py, s.as_any(), "sections")?
+        {
+            file.extend(map);
         }
         let path = std::path::absolute(&scene.path).map_err(|e| invalid("scene", e.to_string()))?;
         file.insert("scene_file".into(), path.display().to_string().into());
@@ -161,7 +166,45 @@ impl Problem {
                 let values = img.pixels.iter().flat_map(|p| p.to_array()).collect();
                 (img.width, img.height, values)
             });
-        Problem::from_source(py, Source::Text { text, target })
+        let file = PathBuf::from(BUILT);
+        Problem::from_source(py, Source::Text { text, file, target })
+    }
+
+    /// with_settings(**sections) -> Problem
+    ///
+    /// The same problem with tables of the file replaced key by key:
+    /// `problem.with_settings(optimizer={"seed": 2, "method": "drot"})`.
+    /// Errors name the problem's file.
+    #[pyo3(signature = (**sections))]
+    fn with_settings(
+        &self,
+        py: Python<'_>,
+        sections: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<Self> {
+        let (text, file, target) = match &self.source {
+            Source::File(path) => {
+                let text = epsm_render::input_file::read_to_string(path).map_err(to_py)?;
+                (text, path.clone(), None)
+            }
+            Source::Text { text, file, target } => (text.clone(), file.clone(), target.clone()),
+        };
+        let mut table: toml::Table = text
+            .parse()
+            .map_err(|e: toml::de::Error| invalid("problem", e.to_string()))?;
+        if let Some(s) = sections {
+            let changes: toml::Table = serde_json::from_value(json(py, s.as_any(), "sections")?)
+                .map_err(|e| invalid("sections", e.to_string()))?;
+            for (name, value) in changes {
+                match (table.get_mut(&name), value) {
+                    (Some(toml::Value::Table(old)), toml::Value::Table(new)) => old.extend(new),
+                    (_, value) => {
+                        table.insert(name, value);
+                    }
+                }
+            }
+        }
+        let text = toml::to_string(&table).map_err(|e| invalid("sections", e.to_string()))?;
+        Problem::from_source(py, Source::Text { text, file, target })
     }
 
     /// The parameter keys, in order.
