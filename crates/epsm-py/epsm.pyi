@@ -104,6 +104,9 @@ class Optimization:
     theta: List[float]
     """The current parameter values; setting clamps to the bounds."""
     @property
+    def param_error(self) -> Optional[float]:
+        """RMS error of the current θ against the true values."""
+    @property
     def keys(self) -> List[str]: ...
     @property
     def iteration(self) -> int: ...

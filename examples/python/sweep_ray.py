@@ -36,7 +36,7 @@ def run_one(name, problem, method, seed, iterations):
     opt = epsm.Optimization(problem.with_settings(optimizer=settings))
     start = time.perf_counter()
     while not opt.done:
-        row = opt.step()
+        opt.step()
     best = opt.best or {}
     tolerance = problem.tolerance
     best_error = best.get("param_error")
@@ -44,7 +44,7 @@ def run_one(name, problem, method, seed, iterations):
         "problem": name,
         "method": method,
         "seed": seed,
-        "last": row["param_error"],
+        "last": opt.param_error,
         "best": best_error,
         "best_iteration": best.get("iteration"),
         "tolerance": tolerance,

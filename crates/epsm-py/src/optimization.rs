@@ -56,6 +56,16 @@ impl Optimization {
         Ok(Self { source, opt })
     }
 
+    /// The true values where known, in θ's order.
+    fn truth(&self) -> Vec<Option<f64>> {
+        self.opt
+            .problem()
+            .params
+            .iter()
+            .map(|p| p.true_value)
+            .collect()
+    }
+
     /// The row of `row` as a Python dict (its JSON form).
     fn row_dict<'py>(py: Python<'py>, row: &epsm_core::report::Row) -> PyResult<Bound<'py, PyAny>> {
         let text = serde_json::to_string(row).map_err(|e| invalid("row", e.to_string()))?;
@@ -121,6 +131,14 @@ impl Optimization {
         }
         self.opt.set_theta(&theta);
         Ok(())
+    }
+
+    /// The RMS error of the current θ against the true values (None
+    /// without them), as the report's `param_error`.
+    #[getter]
+    fn param_error(&self) -> Option<f64> {
+        let truth = self.truth();
+        param_error(self.opt.theta(), &truth)
     }
 
     /// The parameter keys, in θ's order.
