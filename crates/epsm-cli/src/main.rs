@@ -29,6 +29,9 @@ enum Command {
     Compare(cmd::compare::CompareArgs),
     /// Write gradient images (motion field, dI/dθ, OT matching) of one parameter.
     Grad(cmd::grad::GradArgs),
+    /// Match two images (EXR or PNG) by optimal transport: loss, solve
+    /// statistics and a picture of the matching.
+    Match(cmd::matching::MatchArgs),
     /// Validate manifold derivatives of traced paths against Newton re-solves.
     Check(cmd::check::CheckArgs),
     /// Measure performance (renderer, BVH, matching) and print the numbers.
@@ -43,6 +46,7 @@ fn main() -> ExitCode {
         Command::Optimize(args) => cmd::optimize::run(args),
         Command::Compare(args) => cmd::compare::run(args),
         Command::Grad(args) => cmd::grad::run(args),
+        Command::Match(args) => cmd::matching::run(args),
         Command::Check(args) => cmd::check::run(args),
         Command::Bench(b) => cmd::bench::run(b),
     };

@@ -107,11 +107,14 @@ mod testing;
 pub mod vertex;
 
 pub use drops::{DropCounts, DropReason, Dropped};
+/// Scene loading (TOML, glTF 2.0, Mitsuba 3 XML) for front ends that reach
+/// the renderer through this crate.
+pub use epsm_render::scene::{load_parts, load_scene};
 pub use error::{Error, Result, error_chain};
 pub use motion::Motion;
 pub use params::ParamTable;
 pub use paths::{DiffPath, PathKind, classify};
-pub use problem::{ParamSpec, Problem, load_problem};
+pub use problem::{ParamSpec, Problem, load_problem, problem_from_str, problem_with_target};
 pub use run::{Checkpoint, OptResult, Optimization, OptimizeError};
 pub use schedule::Method;
 pub use solve::{Gradient, PixelJacobian, SolveSettings, solve_adjoint, solve_forward};

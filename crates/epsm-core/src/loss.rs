@@ -31,7 +31,7 @@
 //! | `blur` | point units | 0.01 | ≥ 1e-4 (Sinkhorn only) |
 //! | `flow` | — | `false` | `true`, `false` |
 
-use epsm_ot::{MatchState, Matcher, PointCloud, SinkhornSettings, SolveStats};
+use epsm_ot::{MatchState, Matcher, OtResult, PointCloud, SinkhornSettings, SolveStats};
 use epsm_render::Image;
 use glam::{DVec2, DVec3, Vec2, Vec3};
 use serde::{Deserialize, Serialize};
@@ -196,26 +196,74 @@ pub fn evaluate(
     lambda: f64,
     warm: Option<&mut MatchState>,
 ) -> OptResult<LossEval> {
-    if (image.width, image.height) != (target.width, target.height) {
-        return Err(OptimizeError::Invalid(format!(
-            "loss: image is {}x{} but the target is {}x{}",
-            image.width, image.height, target.width, target.height
-        )));
-    }
-    check_finite(image, "rendered image")?;
-    check_finite(target, "target")?;
-    let n = image.pixels.len();
     let Some(matcher) = kind.matcher() else {
+        check_pair(image, target)?;
         return Ok(l2(image, target));
     };
+    let warm = warm.filter(|_| kind == LossKind::OtExact);
+    Ok(match_images(&matcher, image, target, lambda, warm)?.eval)
+}
+
+/// The matcher named `solver` (`exact` or `sinkhorn`, the latter with
+/// `blur`, `ε = blur²`, at least [`epsm_ot::MIN_BLUR`]), as `epsm match`
+/// and the Python `match` name it.
+pub fn matcher_named(solver: &str, blur: f64) -> OptResult<Matcher> {
+    let kind = match solver {
+        "exact" => LossKind::OtExact,
+        "sinkhorn" if blur >= epsm_ot::MIN_BLUR => LossKind::OtSinkhorn { blur },
+        "sinkhorn" => {
+            return Err(OptimizeError::Invalid(format!(
+                "blur: expected a number >= {:e}, found {blur}",
+                epsm_ot::MIN_BLUR
+            )));
+        }
+        other => {
+            return Err(OptimizeError::Invalid(format!(
+                "solver: unknown solver `{other}`; expected exact or sinkhorn"
+            )));
+        }
+    };
+    kind.matcher()
+        .ok_or_else(|| OptimizeError::Invalid(format!("solver: `{solver}` is not OT")))
+}
+
+/// The OT matching of two images: the loss with its per-pixel gradients
+/// and the solver's own result.
+#[derive(Clone, Debug)]
+pub struct ImageMatch {
+    /// Loss and per-pixel gradients (linear colour, film pixels).
+    pub eval: LossEval,
+    /// The solve: per-point gradients in point units, the assignment or the
+    /// plan's barycentric targets, statistics.
+    pub result: OtResult,
+}
+
+/// Matches the OT points ([`points`], weight `lambda > 0` of position
+/// against colour) of `image` to those of `target` (same size, finite
+/// pixels) with `matcher`, warm-started from `warm` when given (which then
+/// keeps what this solve leaves). Sizes are not checked against
+/// [`epsm_ot::MatchLimits`]: callers that take sizes from users do that
+/// ([`epsm_ot::Matcher::check_size`]).
+pub fn match_images(
+    matcher: &Matcher,
+    image: &Image,
+    target: &Image,
+    lambda: f64,
+    warm: Option<&mut MatchState>,
+) -> OptResult<ImageMatch> {
+    check_pair(image, target)?;
+    if !(lambda > 0.0 && lambda.is_finite()) {
+        return Err(OptimizeError::Invalid(format!(
+            "lambda: expected a positive number, found {lambda}"
+        )));
+    }
+    let n = image.pixels.len();
     let lambda32 = lambda as f32;
     let source = points(image, lambda32)?;
     let target_points = points(target, lambda32)?;
     let result = match warm {
-        Some(state) if kind == LossKind::OtExact => {
-            matcher.solve_warm(&source, &target_points, state)?
-        }
-        _ => matcher.solve(&source, &target_points)?,
+        Some(state) => matcher.solve_warm(&source, &target_points, state)?,
+        None => matcher.solve(&source, &target_points)?,
     };
     let (w, h) = (f64::from(image.width), f64::from(image.height));
     let mut g_rgb = Vec::with_capacity(n);
@@ -237,7 +285,7 @@ pub fn evaluate(
             t[4] / lambda32 * h as f32,
         ));
     }
-    Ok(LossEval {
+    let eval = LossEval {
         value: result.loss,
         width: image.width,
         height: image.height,
@@ -245,7 +293,20 @@ pub fn evaluate(
         g_xy,
         matched: Some(matched),
         guards: MatchGuards::of(&result.stats),
-    })
+    };
+    Ok(ImageMatch { eval, result })
+}
+
+/// Fails unless `image` and `target` have the same size and finite pixels.
+fn check_pair(image: &Image, target: &Image) -> OptResult<()> {
+    if (image.width, image.height) != (target.width, target.height) {
+        return Err(OptimizeError::Invalid(format!(
+            "loss: image is {}x{} but the target is {}x{}",
+            image.width, image.height, target.width, target.height
+        )));
+    }
+    check_finite(image, "rendered image")?;
+    check_finite(target, "target")
 }
 
 /// Adds the colour-flow term to `eval.g_xy`: per pixel `−(∂c/∂p)ᵀ g_rgb`,

@@ -12,15 +12,12 @@ use std::path::PathBuf;
 use anyhow::Context;
 use epsm_core::field::{image_derivative, motion_field};
 use epsm_core::inspect::{
-    Segment, fd_step, flow_colour, matching_lines, motion_arrows, normalized_luminance,
-    signed_colour,
+    fd_step, flow_colour, matching_lines, motion_arrows, normalized_luminance, signed_colour,
 };
 use epsm_core::load_problem;
-use epsm_render::Image;
-use epsm_render::image_io::linear_to_srgb;
-
 use plotters::prelude::*;
 
+use super::canvas::{Canvas, srgb};
 use super::plots::write_png;
 
 /// Arguments of `epsm grad`.
@@ -37,58 +34,6 @@ pub struct GradArgs {
     /// Samples per pixel of the finite-difference renders for dI/dθ.
     #[arg(long, default_value_t = 16)]
     pub spp: u32,
-}
-
-/// An enlarged RGB8 canvas.
-struct Canvas {
-    w: u32,
-    h: u32,
-    scale: u32,
-    rgb: Vec<u8>,
-}
-
-impl Canvas {
-    fn new(src_w: u32, src_h: u32, colour: impl Fn(u32, u32) -> [f32; 3]) -> Self {
-        let scale = (512 / src_w.max(src_h)).max(1);
-        let (w, h) = (src_w * scale, src_h * scale);
-        let mut rgb = vec![0u8; (w * h * 3) as usize];
-        for y in 0..h {
-            for x in 0..w {
-                let c = colour(x / scale, y / scale);
-                let i = ((y * w + x) * 3) as usize;
-                for k in 0..3 {
-                    rgb[i + k] = (c[k].clamp(0.0, 1.0) * 255.0 + 0.5) as u8;
-                }
-            }
-        }
-        Self { w, h, scale, rgb }
-    }
-
-    fn lines(&mut self, lines: &[Segment], colour: RGBColor) -> anyhow::Result<()> {
-        let (w, h, scale) = (self.w, self.h, self.scale as f32);
-        let px = |p: glam::Vec2| ((p.x * scale) as i32, (p.y * scale) as i32);
-        let root = BitMapBackend::with_buffer(&mut self.rgb, (w, h)).into_drawing_area();
-        for Segment { from: a, to: b } in lines {
-            let e = |e: DrawingAreaErrorKind<_>| anyhow::anyhow!("drawing: {e}");
-            root.draw(&PathElement::new(
-                vec![px(*a), px(*b)],
-                colour.stroke_width(1),
-            ))
-            .map_err(e)?;
-            root.draw(&Circle::new(px(*b), 2, colour.filled()))
-                .map_err(e)?;
-        }
-        root.present().map_err(|e| anyhow::anyhow!("drawing: {e}"))
-    }
-}
-
-fn srgb(img: &Image, x: u32, y: u32) -> [f32; 3] {
-    let c = img.get(x, y);
-    [
-        linear_to_srgb(c.x),
-        linear_to_srgb(c.y),
-        linear_to_srgb(c.z),
-    ]
 }
 
 /// Runs `epsm grad`.

@@ -1,9 +1,11 @@
 //! One module per command.
 
 pub mod bench;
+pub mod canvas;
 pub mod check;
 pub mod compare;
 pub mod grad;
+pub mod matching;
 pub mod optimize;
 pub mod plots;
 pub mod render;

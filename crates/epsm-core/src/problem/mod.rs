@@ -249,5 +249,14 @@ pub fn load_problem(path: &Path) -> OptResult<Problem> {
 /// directory resolves relative paths.
 pub fn problem_from_str(text: &str, file: &Path) -> OptResult<Problem> {
     let (desc, locator) = epsm_render::scene::load::parse_toml::<ProblemDesc>(text, file)?;
-    validate::problem(&desc, file, &locator)
+    validate::problem(&desc, file, &locator, None)
+}
+
+/// As [`problem_from_str`], with the target given as an image (linear RGB
+/// at the scene camera's resolution) in place of a `target.image` file
+/// (which the text must then leave out): checked as that field is, with
+/// errors naming `target.image`.
+pub fn problem_with_target(text: &str, file: &Path, target: Image) -> OptResult<Problem> {
+    let (desc, locator) = epsm_render::scene::load::parse_toml::<ProblemDesc>(text, file)?;
+    validate::problem(&desc, file, &locator, Some(target))
 }

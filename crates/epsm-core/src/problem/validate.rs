@@ -4,8 +4,8 @@
 use std::path::Path;
 
 use epsm_ot::{MIN_BLUR, MatchLimits};
-use epsm_render::Scene;
 use epsm_render::scene::load::{Ctx, Locator, load_parts, parts_from_desc};
+use epsm_render::{Image, Scene};
 
 use super::auto::scale;
 use super::desc::ProblemDesc;
@@ -15,8 +15,14 @@ use crate::params::ParamTable;
 use crate::run::OptResult;
 use crate::schedule::Method;
 
-/// Builds the problem of `d`.
-pub(super) fn problem(d: &ProblemDesc, file: &Path, locator: &Locator) -> OptResult<Problem> {
+/// Builds the problem of `d`, with `given` (linear RGB) as its target image
+/// when the caller holds one in place of a `target.image` file.
+pub(super) fn problem(
+    d: &ProblemDesc,
+    file: &Path,
+    locator: &Locator,
+    given: Option<Image>,
+) -> OptResult<Problem> {
     let c = Ctx::new(file, locator, "");
     let scene = match (&d.scene_file, &d.scene) {
         (Some(path), None) => load_parts(&c.resolve(path))
@@ -114,8 +120,17 @@ pub(super) fn problem(d: &ProblemDesc, file: &Path, locator: &Locator) -> OptRes
             step,
         });
     }
-    let target = match &d.target.image {
-        Some(path) => {
+    let image = match (&d.target.image, given) {
+        (Some(_), Some(_)) => {
+            let msg = "the target is given as an image: leave `target.image` out";
+            return Err(c.err("target.image", msg).into());
+        }
+        (None, Some(img)) => Some(
+            epsm_render::image_io::check_values(file, &img, f32::INFINITY)
+                .map(|()| img)
+                .map_err(|e| c.err("target.image", e.to_string()))?,
+        ),
+        (Some(path), None) => {
             let path = c.resolve(path);
             let img = epsm_render::image_io::read_image(&path)
                 .and_then(|img| {
@@ -123,6 +138,12 @@ pub(super) fn problem(d: &ProblemDesc, file: &Path, locator: &Locator) -> OptRes
                     Ok(img)
                 })
                 .map_err(|e| c.err("target.image", e.to_string()))?;
+            Some(img)
+        }
+        (None, None) => None,
+    };
+    let target = match image {
+        Some(img) => {
             let cam = &scene.camera;
             if (img.width, img.height) != (cam.width, cam.height) {
                 let msg = format!(
