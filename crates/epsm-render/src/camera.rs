@@ -21,7 +21,7 @@ use glam::{DMat3, DVec2, DVec3, Vec2, Vec3};
 
 use crate::Ray;
 #[cfg(target_arch = "x86_64")]
-use crate::simd::{Avx512, F32x16, Vec3x16};
+use crate::simd::{F32x16, Lanes, Vec3x16};
 
 /// A perspective camera. Geometry is kept in `f64` (it is differentiated);
 /// ray generation uses a cached `f32` basis.
@@ -188,7 +188,7 @@ impl FilmRays {
     /// unit directions out.
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
-    pub(crate) fn rays16(&self, k: Avx512, film: [F32x16; 2]) -> Vec3x16 {
+    pub(crate) fn rays16<B: Lanes>(&self, k: B, film: [F32x16<B>; 2]) -> Vec3x16<B> {
         let sx = (k.f32(2.0) * film[0] / k.f32(self.size.x) - k.f32(1.0)) * k.f32(self.th_aspect);
         let sy = (k.f32(1.0) - k.f32(2.0) * film[1] / k.f32(self.size.y)) * k.f32(self.th);
         let dir = k.vec3(self.forward) + k.vec3(self.right) * sx + k.vec3(self.up) * sy;

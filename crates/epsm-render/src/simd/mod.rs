@@ -1,33 +1,40 @@
 //! Sixteen lanes at a time: the value types of the wide tracer
-//! (`tracer::wide`), one lane per path, on CPUs with AVX-512.
+//! (`tracer::wide`), one lane per path, over three backends chosen at run
+//! time.
 //!
 //! | type | lanes | holds |
 //! |---|---|---|
-//! | [`F32x16`] | 16 × `f32` | one `__m512` |
-//! | [`F64x16`] | 16 × `f64` | two `__m512d` (lanes 0–7, 8–15) |
-//! | [`U32x16`] | 16 × `u32` | one `__m512i` |
-//! | [`U64x16`] | 16 × `u64` | two `__m512i` (lanes 0–7, 8–15) |
-//! | [`Mask16`] | 16 × `bool` | one `__mmask16` (bit `i`: lane `i`) |
+//! | [`F32x16`] | 16 × `f32` | the backend's `F32` |
+//! | [`F64x16`] | 16 × `f64` | the backend's `F64` |
+//! | [`U32x16`] | 16 × `u32` | the backend's `U32` |
+//! | [`U64x16`] | 16 × `u64` | the backend's `U64` |
+//! | [`Mask16`] | 16 × `bool` | a `u16` (bit `i`: lane `i`), on every backend |
 //! | [`Vec3x16`] | 16 × [`glam::Vec3`] | three [`F32x16`] |
+//!
+//! | backend ([`Lanes`]) | CPU | `F32` | `F64` |
+//! |---|---|---|---|
+//! | [`Avx512`] | AVX-512 F, VL, DQ, BW | one `__m512` | two `__m512d` |
+//! | [`Avx2`](crate::bvh::Avx2) | AVX2 | two `__m256` | four `__m256d` |
+//! | [`Portable`] | any | `[f32; 16]` | `[f64; 16]` |
 //!
 //! Model: every lane operation is the IEEE operation the scalar code does on
 //! one value (no fused multiply–add, no approximate reciprocals), so a lane
 //! computes bit for bit what the scalar tracer computes for its path when
-//! the operations come in the same order. Where Rust's scalar semantics and
-//! the instruction's differ, the method says which it follows: `min` and
-//! `max` are `if a < b { a } else { b }` and `if a > b { a } else { b }`
-//! (the instructions' rule, and glam's `min_element`/`max_element`; Rust's
-//! `f32::min(x, c)` agrees with it for a constant `c` that is not NaN);
-//! comparisons are ordered (false on NaN) except `ne`.
+//! the operations come in the same order, on every backend. Where Rust's
+//! scalar semantics and the instruction's differ, the method says which it
+//! follows: `min` and `max` are `if a < b { a } else { b }` and
+//! `if a > b { a } else { b }` (the instructions' rule, and glam's
+//! `min_element`/`max_element`; Rust's `f32::min(x, c)` agrees with it for
+//! a constant `c` that is not NaN); comparisons are ordered (false on NaN).
 //!
-//! Soundness: the lane types wrap AVX-512 registers and their methods call
-//! the intrinsics without checking the CPU. A value of any of them can only
-//! be made from an [`Avx512`] token (the constructors take one) or from other
-//! values, and a token exists only on a CPU found to have AVX-512 F, VL, DQ
-//! and BW ([`Avx512::detect`]), so every intrinsic call runs on such a CPU
-//! (the `avx!` macro below states this once for every `unsafe` block). The
-//! methods are `#[inline(always)]` so that they compile into the caller's
-//! `#[target_feature]` function as single instructions.
+//! Soundness: a lane value holds its backend's token (a zero-sized value),
+//! and every operation is a method of that token. The x86 backends' tokens
+//! exist only on CPUs found to have their features ([`Avx512::detect`],
+//! [`Avx2::detect`](crate::bvh::Avx2::detect)), so their intrinsics run
+//! only there (one SAFETY comment per backend states this for all its
+//! `unsafe` blocks). Wide code is generic over the backend and entered
+//! through [`Lanes::run`], which compiles it with the backend's features,
+//! so the intrinsics (all `#[inline(always)]`) become single instructions.
 //!
 //! Inlining: an intrinsic inlines only into a function compiled with its
 //! features, and a closure is compiled as a function of its own, without
@@ -36,106 +43,39 @@
 //! the closure is `#[inline(always)]` (allowed on closures passed as
 //! arguments, not on `let` ones): wide code uses plain loops, nested
 //! `#[inline(always)]` functions, and the token's constant makers
-//! ([`Avx512::f32`] and the like) instead.
+//! ([`Lanes::f32`] and the like) instead.
 
-#![allow(unsafe_code)]
+use std::fmt::Debug;
 
-/// Runs an AVX-512 intrinsic expression.
-///
-/// SAFETY (every use): the expression calls AVX-512 F/VL/DQ/BW intrinsics
-/// (and the AVX2 ones they imply) on values of this module's lane types,
-/// which exist only after [`Avx512::detect`] found those features (module
-/// docs); pointer arguments, where an intrinsic takes one, are stated at the
-/// use.
-macro_rules! avx {
-    ($e:expr) => {
-        // SAFETY: see the macro's documentation.
-        unsafe { $e }
-    };
-}
+use crate::bvh::BoxTest;
 
-/// Implements operator traits for a lane type by one intrinsic each, applied
-/// register by register: `binary!(one T; Add, add, _mm512_add_ps; …)` for a
-/// type wrapping one register, `binary!(two T; …)` for one wrapping two
-/// (lanes 0–7, 8–15). Every impl is `#[inline(always)]`.
+/// Implements operator traits for a lane type by one backend method each:
+/// `binary!(F32x16; Add, add, f32_add; …)`. Every impl is
+/// `#[inline(always)]`.
 macro_rules! binary {
-    (one $ty:ident; $($trait:ident, $method:ident, $intrinsic:ident;)*) => {
+    ($ty:ident; $($trait:ident, $method:ident, $op:ident;)*) => {
         $(
-            impl std::ops::$trait for $ty {
+            impl<B: Lanes> std::ops::$trait for $ty<B> {
                 type Output = Self;
                 #[inline(always)]
                 fn $method(self, o: Self) -> Self {
-                    Self(avx!($intrinsic(self.0, o.0)))
+                    Self(self.1.$op(self.0, o.0), self.1)
                 }
             }
         )*
-    };
-    (two $ty:ident; $($trait:ident, $method:ident, $intrinsic:ident;)*) => {
-        $(
-            impl std::ops::$trait for $ty {
-                type Output = Self;
-                #[inline(always)]
-                fn $method(self, o: Self) -> Self {
-                    Self([
-                        avx!($intrinsic(self.0[0], o.0[0])),
-                        avx!($intrinsic(self.0[1], o.0[1])),
-                    ])
-                }
-            }
-        )*
-    };
-}
-
-/// Implements `Neg` for a float lane type as scalar negation does it: the
-/// sign bit flipped (`$xor` with `$set1(-0.0)`), register by register
-/// (`one` or `two` registers, as for [`binary!`]).
-macro_rules! negate {
-    (one $ty:ident; $xor:ident, $set1:ident) => {
-        impl std::ops::Neg for $ty {
-            type Output = Self;
-            /// Flips the sign bit, as scalar negation does.
-            #[inline(always)]
-            fn neg(self) -> Self {
-                Self(avx!($xor(self.0, $set1(-0.0))))
-            }
-        }
-    };
-    (two $ty:ident; $xor:ident, $set1:ident) => {
-        impl std::ops::Neg for $ty {
-            type Output = Self;
-            /// Flips the sign bit, as scalar negation does.
-            #[inline(always)]
-            fn neg(self) -> Self {
-                let sign = avx!($set1(-0.0));
-                Self([avx!($xor(self.0[0], sign)), avx!($xor(self.0[1], sign))])
-            }
-        }
     };
 }
 
 /// Defines the ordered comparison methods of a float lane type (inside its
 /// `impl`), each returning the [`Mask16`] of the lanes where it holds:
-/// `compare!(one _mm512_cmp_ps_mask; /// doc lt, _CMP_LT_OQ; …)` for a type
-/// wrapping one register, `compare!(two _mm512_cmp_pd_mask; …)` for one
-/// wrapping two (the first register's mask in the low byte).
+/// `compare!(f32_cmp; /// doc lt, Lt; …)`.
 macro_rules! compare {
-    (one $cmp:ident; $(#[$doc:meta] $method:ident, $predicate:ident;)*) => {
+    ($cmp:ident; $(#[$doc:meta] $method:ident, $predicate:ident;)*) => {
         $(
             #[$doc]
             #[inline(always)]
             pub fn $method(self, o: Self) -> Mask16 {
-                Mask16(avx!($cmp::<$predicate>(self.0, o.0)))
-            }
-        )*
-    };
-    (two $cmp:ident; $(#[$doc:meta] $method:ident, $predicate:ident;)*) => {
-        $(
-            #[$doc]
-            #[inline(always)]
-            pub fn $method(self, o: Self) -> Mask16 {
-                let lo = avx!($cmp::<$predicate>(self.0[0], o.0[0]));
-                let hi = avx!($cmp::<$predicate>(self.0[1], o.0[1]));
-                Mask16(u16::from(lo) | u16::from(hi) << 8)
+                self.1.$cmp(self.0, o.0, Cmp::$predicate)
             }
         )*
     };
@@ -156,8 +96,14 @@ macro_rules! clamp {
     };
 }
 
+#[cfg(target_arch = "x86_64")]
+mod avx2;
+#[cfg(target_arch = "x86_64")]
+mod avx512;
 mod f32x16;
 mod f64x16;
+mod mask;
+mod portable;
 mod u32x16;
 mod u64x16;
 mod vec3;
@@ -165,59 +111,285 @@ mod vec3;
 #[cfg(test)]
 mod tests;
 
-pub(crate) use f32x16::{F32x16, Mask16};
+#[cfg(target_arch = "x86_64")]
+pub(crate) use avx512::Avx512;
+pub(crate) use f32x16::F32x16;
 pub(crate) use f64x16::F64x16;
+pub(crate) use mask::Mask16;
+pub(crate) use portable::Portable;
 pub(crate) use u32x16::U32x16;
 pub(crate) use u64x16::U64x16;
 pub(crate) use vec3::Vec3x16;
 
+/// Calls the generic function `$f` (taking a backend token) with every
+/// backend this CPU has: the portable one always, then AVX2 and AVX-512
+/// where detected. Returns the names of the backends it ran, in that order.
+#[cfg(test)]
+macro_rules! each_backend {
+    ($f:expr) => {{
+        let mut ran = vec!["portable"];
+        $f($crate::simd::Portable);
+        #[cfg(target_arch = "x86_64")]
+        {
+            if let Some(k) = $crate::bvh::Avx2::detect() {
+                $f(k);
+                ran.push("avx2");
+            }
+            if let Some(k) = $crate::simd::Avx512::detect() {
+                $f(k);
+                ran.push("avx512");
+            }
+        }
+        ran
+    }};
+}
+#[cfg(test)]
+pub(crate) use each_backend;
+
 /// Lanes per vector.
 pub(crate) const LANES: usize = 16;
 
-/// Proof that the CPU has AVX-512 F, VL, DQ and BW, and with them AVX2,
-/// BMI1, BMI2, LZCNT and POPCNT: code compiled with
-/// `#[target_feature(enable = "avx512f,avx512vl,avx512dq,avx512bw,avx2,bmi1,bmi2,lzcnt,popcnt")]`
-/// may run while one is held, and it makes the lane types' constants.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Avx512(());
+/// A computation generic over the backend: what [`Backend::call`] runs
+/// (a closure cannot be generic).
+pub(crate) trait WithLanes {
+    /// What it returns.
+    type Output;
+    /// Runs it with backend `k` (inlined into [`Lanes::run`]).
+    fn call<B: Lanes>(self, k: B) -> Self::Output;
+}
 
-impl Avx512 {
+/// One of the backends, chosen at run time.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Backend {
+    /// AVX-512 lanes.
+    #[cfg(target_arch = "x86_64")]
+    Avx512(Avx512),
+    /// AVX2 lanes.
+    #[cfg(target_arch = "x86_64")]
+    Avx2(crate::bvh::Avx2),
+    /// Plain arrays.
+    Portable(Portable),
+}
+
+impl Backend {
+    /// The fastest vector backend this CPU has: AVX-512, else AVX2; `None`
+    /// without either (the portable lanes are slower than the scalar code
+    /// there: `docs/performance.md`).
+    pub fn fastest() -> Option<Self> {
+        #[cfg(target_arch = "x86_64")]
+        {
+            if let Some(k) = Avx512::detect() {
+                return Some(Self::Avx512(k));
+            }
+            if let Some(k) = crate::bvh::Avx2::detect() {
+                return Some(Self::Avx2(k));
+            }
+        }
+        None
+    }
+
+    /// Runs `w` with this backend, compiled with its CPU features.
+    pub fn call<W: WithLanes>(self, w: W) -> W::Output {
+        match self {
+            #[cfg(target_arch = "x86_64")]
+            Self::Avx512(k) => k.run(
+                #[inline(always)]
+                || w.call(k),
+            ),
+            #[cfg(target_arch = "x86_64")]
+            Self::Avx2(k) => k.run(
+                #[inline(always)]
+                || w.call(k),
+            ),
+            Self::Portable(k) => k.run(
+                #[inline(always)]
+                || w.call(k),
+            ),
+        }
+    }
+}
+
+/// An ordered float comparison (false on NaN).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Cmp {
+    /// `a < b`.
+    Lt,
+    /// `a <= b`.
+    Le,
+    /// `a > b`.
+    Gt,
+    /// `a >= b`.
+    Ge,
+    /// `a == b`.
+    Eq,
+}
+
+impl Cmp {
+    /// The comparison on two scalars.
+    #[inline(always)]
+    pub fn scalar<T: PartialOrd>(self, a: T, b: T) -> bool {
+        match self {
+            Self::Lt => a < b,
+            Self::Le => a <= b,
+            Self::Gt => a > b,
+            Self::Ge => a >= b,
+            Self::Eq => a == b,
+        }
+    }
+}
+
+/// A backend of the lane types: a token (a value exists only on a CPU with
+/// the backend's features) whose methods are the lane operations on its
+/// registers. The lane types ([`F32x16`], …) wrap a register and the token
+/// and call these; wide code uses the lane types, generic over the backend.
+///
+/// Every method is the lane-by-lane IEEE (or wrapping integer) operation
+/// its lane-type method documents. Lane `i` of a register is lane `i` of
+/// the array its `*_load` takes and its `*_store` returns.
+#[allow(unsafe_code)]
+pub(crate) trait Lanes: Copy + Debug + Send + Sync + 'static {
+    /// Sixteen `f32`.
+    type F32: Copy + Debug;
+    /// Sixteen `f64`.
+    type F64: Copy + Debug;
+    /// Sixteen `u32`.
+    type U32: Copy + Debug;
+    /// Sixteen `u64`.
+    type U64: Copy + Debug;
+    /// The scalar BVH's box tests at this CPU level (for the per-lane
+    /// fallbacks of the wide walks).
+    type Boxes: BoxTest;
+
+    /// The box tests of this CPU level.
+    fn boxes(self) -> Self::Boxes;
+
+    /// Runs `f` compiled with the backend's CPU features (`f` must be
+    /// inlined: callers pass an `#[inline(always)]` closure).
+    fn run<R>(self, f: impl FnOnce() -> R) -> R;
+
     /// Every lane `x` ([`F32x16::splat`]).
     #[inline(always)]
-    pub fn f32(self, x: f32) -> F32x16 {
+    fn f32(self, x: f32) -> F32x16<Self> {
         F32x16::splat(self, x)
     }
 
     /// Every lane `x` ([`U32x16::splat`]).
     #[inline(always)]
-    pub fn u32(self, x: u32) -> U32x16 {
+    fn u32(self, x: u32) -> U32x16<Self> {
         U32x16::splat(self, x)
     }
 
     /// Every lane `x` ([`U64x16::splat`]).
     #[inline(always)]
-    pub fn u64(self, x: u64) -> U64x16 {
+    fn u64(self, x: u64) -> U64x16<Self> {
         U64x16::splat(self, x)
     }
 
     /// Every lane `v` ([`Vec3x16::splat`]).
     #[inline(always)]
-    pub fn vec3(self, v: glam::Vec3) -> Vec3x16 {
+    fn vec3(self, v: glam::Vec3) -> Vec3x16<Self> {
         Vec3x16::splat(self, v)
     }
 
-    /// The token, when the CPU has every feature it stands for.
-    pub fn detect() -> Option<Self> {
-        use std::arch::is_x86_feature_detected as has;
-        (has!("avx512f")
-            && has!("avx512vl")
-            && has!("avx512dq")
-            && has!("avx512bw")
-            && has!("avx2")
-            && has!("bmi1")
-            && has!("bmi2")
-            && has!("lzcnt")
-            && has!("popcnt"))
-        .then_some(Self(()))
-    }
+    // `f32` lanes.
+    fn f32_splat(self, x: f32) -> Self::F32;
+    fn f32_load(self, lanes: [f32; LANES]) -> Self::F32;
+    fn f32_store(self, v: Self::F32) -> [f32; LANES];
+    fn f32_add(self, a: Self::F32, b: Self::F32) -> Self::F32;
+    fn f32_sub(self, a: Self::F32, b: Self::F32) -> Self::F32;
+    fn f32_mul(self, a: Self::F32, b: Self::F32) -> Self::F32;
+    fn f32_div(self, a: Self::F32, b: Self::F32) -> Self::F32;
+    fn f32_neg(self, a: Self::F32) -> Self::F32;
+    fn f32_sqrt(self, a: Self::F32) -> Self::F32;
+    fn f32_abs(self, a: Self::F32) -> Self::F32;
+    fn f32_min(self, a: Self::F32, b: Self::F32) -> Self::F32;
+    fn f32_max(self, a: Self::F32, b: Self::F32) -> Self::F32;
+    fn f32_select(self, m: Mask16, a: Self::F32, b: Self::F32) -> Self::F32;
+    fn f32_copysign(self, magnitude: Self::F32, sign: Self::F32) -> Self::F32;
+    fn f32_cmp(self, a: Self::F32, b: Self::F32, c: Cmp) -> Mask16;
+    fn f32_to_bits(self, a: Self::F32) -> Self::U32;
+    fn f32_from_bits(self, a: Self::U32) -> Self::F32;
+    fn f32_from_u32(self, a: Self::U32) -> Self::F32;
+    fn f32_trunc_i32(self, a: Self::F32) -> Self::U32;
+    fn f32_to_f64(self, a: Self::F32) -> Self::F64;
+    fn f32_permute(self, a: Self::F32, index: Self::U32) -> Self::F32;
+    fn f32_reduce_min(self, a: Self::F32, m: Mask16) -> f32;
+    /// # Safety
+    /// Every lane of `m` indexes `table` in bounds, below `i32::MAX`.
+    unsafe fn f32_gather(
+        self,
+        table: &[f32],
+        index: Self::U32,
+        m: Mask16,
+        fallback: Self::F32,
+    ) -> Self::F32;
+    /// # Safety
+    /// `src` holds at least `m.count()` values.
+    unsafe fn f32_expand(self, a: Self::F32, m: Mask16, src: &[f32]) -> Self::F32;
+
+    // `f64` lanes.
+    fn f64_splat(self, x: f64) -> Self::F64;
+    fn f64_load(self, lanes: [f64; LANES]) -> Self::F64;
+    fn f64_store(self, v: Self::F64) -> [f64; LANES];
+    fn f64_add(self, a: Self::F64, b: Self::F64) -> Self::F64;
+    fn f64_sub(self, a: Self::F64, b: Self::F64) -> Self::F64;
+    fn f64_mul(self, a: Self::F64, b: Self::F64) -> Self::F64;
+    fn f64_div(self, a: Self::F64, b: Self::F64) -> Self::F64;
+    fn f64_neg(self, a: Self::F64) -> Self::F64;
+    fn f64_sqrt(self, a: Self::F64) -> Self::F64;
+    fn f64_abs(self, a: Self::F64) -> Self::F64;
+    fn f64_min(self, a: Self::F64, b: Self::F64) -> Self::F64;
+    fn f64_select(self, m: Mask16, a: Self::F64, b: Self::F64) -> Self::F64;
+    fn f64_copysign(self, magnitude: Self::F64, sign: Self::F64) -> Self::F64;
+    fn f64_cmp(self, a: Self::F64, b: Self::F64, c: Cmp) -> Mask16;
+    fn f64_to_f32(self, a: Self::F64) -> Self::F32;
+
+    // `u32` lanes.
+    fn u32_splat(self, x: u32) -> Self::U32;
+    fn u32_load(self, lanes: [u32; LANES]) -> Self::U32;
+    fn u32_store(self, v: Self::U32) -> [u32; LANES];
+    fn u32_add(self, a: Self::U32, b: Self::U32) -> Self::U32;
+    fn u32_sub(self, a: Self::U32, b: Self::U32) -> Self::U32;
+    fn u32_mul(self, a: Self::U32, b: Self::U32) -> Self::U32;
+    fn u32_and(self, a: Self::U32, b: Self::U32) -> Self::U32;
+    fn u32_or(self, a: Self::U32, b: Self::U32) -> Self::U32;
+    fn u32_xor(self, a: Self::U32, b: Self::U32) -> Self::U32;
+    fn u32_shr(self, a: Self::U32, n: u32) -> Self::U32;
+    fn u32_shl(self, a: Self::U32, n: u32) -> Self::U32;
+    fn u32_shr_signed(self, a: Self::U32, n: u32) -> Self::U32;
+    fn u32_select(self, m: Mask16, a: Self::U32, b: Self::U32) -> Self::U32;
+    fn u32_lt(self, a: Self::U32, b: Self::U32) -> Mask16;
+    fn u32_eq(self, a: Self::U32, b: Self::U32) -> Mask16;
+    /// # Safety
+    /// Every lane of `m` indexes `table` in bounds, below `i32::MAX`.
+    unsafe fn u32_gather(
+        self,
+        table: &[u32],
+        index: Self::U32,
+        m: Mask16,
+        fallback: Self::U32,
+    ) -> Self::U32;
+
+    // `u64` lanes.
+    fn u64_splat(self, x: u64) -> Self::U64;
+    fn u64_load(self, lanes: [u64; LANES]) -> Self::U64;
+    fn u64_store(self, v: Self::U64) -> [u64; LANES];
+    fn u64_add(self, a: Self::U64, b: Self::U64) -> Self::U64;
+    fn u64_mul(self, a: Self::U64, b: Self::U64) -> Self::U64;
+    fn u64_xor(self, a: Self::U64, b: Self::U64) -> Self::U64;
+    fn u64_shr(self, a: Self::U64, n: u32) -> Self::U64;
+    fn u64_from_u32(self, a: Self::U32) -> Self::U64;
+    fn u64_low_u32(self, a: Self::U64) -> Self::U32;
+    /// # Safety
+    /// Every lane of `m` indexes `table` in bounds, below `i32::MAX`.
+    unsafe fn u64_gather(
+        self,
+        table: &[u64],
+        index: Self::U32,
+        m: Mask16,
+        fallback: Self::U64,
+    ) -> Self::U64;
+    /// # Safety
+    /// `src` holds at least `m.count()` values.
+    unsafe fn u64_expand(self, a: Self::U64, m: Mask16, src: &[u64]) -> Self::U64;
 }

@@ -6,11 +6,11 @@
 
 use glam::UVec2;
 
+use crate::bvh::Rays16;
 use crate::camera::FilmRays;
-use crate::ray::Rays16;
 use crate::sampler::BLOCK;
 use crate::sampler::wide::{Streams16, TileKeys};
-use crate::simd::{Avx512, F32x16, LANES, Mask16, U32x16, U64x16, Vec3x16};
+use crate::simd::{F32x16, LANES, Lanes, Mask16, U32x16, U64x16, Vec3x16};
 
 /// A batch of started samples, by field and lane, for expanding loads.
 #[derive(Clone, Debug)]
@@ -83,12 +83,12 @@ impl Queue {
     /// those lanes' in `streams` and `ray`, their sequence numbers go to
     /// `queued`.
     #[inline(always)]
-    pub fn start(
+    pub fn start<B: Lanes>(
         &mut self,
-        k: Avx512,
+        k: B,
         fill: Mask16,
-        streams: &mut Streams16,
-        ray: &mut Rays16,
+        streams: &mut Streams16<B>,
+        ray: &mut Rays16<B>,
         queued: &mut [u64; LANES],
     ) {
         debug_assert!(u64::from(fill.count()) <= self.total - self.started);
@@ -126,7 +126,7 @@ impl Queue {
 
     /// Draws the next (up to) sixteen samples of the queue into the batch.
     #[inline(always)]
-    fn draw(&mut self, k: Avx512) {
+    fn draw<B: Lanes>(&mut self, k: B) {
         let len = (self.total - self.drawn).min(LANES as u64) as usize;
         debug_assert!(len > 0);
         let spp = u64::from(self.spp);
