@@ -33,8 +33,9 @@
 //! [`Avx2::detect`](crate::bvh::Avx2::detect)), so their intrinsics run
 //! only there (one SAFETY comment per backend states this for all its
 //! `unsafe` blocks). Wide code is generic over the backend and entered
-//! through [`Lanes::run`], which compiles it with the backend's features,
-//! so the intrinsics (all `#[inline(always)]`) become single instructions.
+//! through [`Backend::call`] (the backend picked at run time), which runs it
+//! in [`Lanes::run`], compiled with the backend's features, so the
+//! intrinsics (all `#[inline(always)]`) become single instructions.
 //!
 //! Inlining: an intrinsic inlines only into a function compiled with its
 //! features, and a closure is compiled as a function of its own, without
