@@ -20,8 +20,6 @@
 use glam::{DMat3, DVec2, DVec3, Vec2, Vec3};
 
 use crate::Ray;
-#[cfg(target_arch = "x86_64")]
-use crate::simd::{Avx512, F32x16, Vec3x16};
 
 /// A perspective camera. Geometry is kept in `f64` (it is differentiated);
 /// ray generation uses a cached `f32` basis.
@@ -155,15 +153,15 @@ impl Camera {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FilmRays {
     origin: Vec3,
-    forward: Vec3,
-    right: Vec3,
-    up: Vec3,
+    pub(crate) forward: Vec3,
+    pub(crate) right: Vec3,
+    pub(crate) up: Vec3,
     /// `tan(fov_y / 2)`.
-    th: f32,
+    pub(crate) th: f32,
     /// `tan(fov_y / 2) · width / height`.
-    th_aspect: f32,
+    pub(crate) th_aspect: f32,
     /// Image size in pixels.
-    size: Vec2,
+    pub(crate) size: Vec2,
 }
 
 impl FilmRays {
@@ -180,19 +178,6 @@ impl FilmRays {
     #[inline]
     pub fn origin(&self) -> Vec3 {
         self.origin
-    }
-
-    /// The directions of [`FilmRays::ray`] in every lane (the same
-    /// operations, so the same directions bit for bit; the origin is
-    /// [`FilmRays::origin`]): the lanes' film positions' `x` and `y` in,
-    /// unit directions out.
-    #[cfg(target_arch = "x86_64")]
-    #[inline(always)]
-    pub(crate) fn rays16(&self, k: Avx512, film: [F32x16; 2]) -> Vec3x16 {
-        let sx = (k.f32(2.0) * film[0] / k.f32(self.size.x) - k.f32(1.0)) * k.f32(self.th_aspect);
-        let sy = (k.f32(1.0) - k.f32(2.0) * film[1] / k.f32(self.size.y)) * k.f32(self.th);
-        let dir = k.vec3(self.forward) + k.vec3(self.right) * sx + k.vec3(self.up) * sy;
-        dir.normalize(k)
     }
 }
 

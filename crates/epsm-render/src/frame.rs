@@ -9,9 +9,6 @@
 
 use glam::{DVec3, Vec3};
 
-#[cfg(target_arch = "x86_64")]
-use crate::simd::{Avx512, F32x16, LANES, Mask16, Vec3x16};
-
 /// An orthonormal frame: tangent `s`, bitangent `t`, normal `n` (right-handed,
 /// `s × t = n`).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -85,74 +82,6 @@ pub fn abs_cos_theta(w: Vec3) -> f32 {
 #[inline]
 pub fn same_hemisphere(a: Vec3, b: Vec3) -> bool {
     a.z * b.z > 0.0
-}
-
-/// Sixteen shading frames, one per lane ([`Frame`] by lane), for the wide
-/// tracer.
-#[cfg(target_arch = "x86_64")]
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Frames16 {
-    /// First tangents.
-    pub s: Vec3x16,
-    /// Second tangents.
-    pub t: Vec3x16,
-    /// Shading normals.
-    pub n: Vec3x16,
-}
-
-#[cfg(target_arch = "x86_64")]
-impl Frames16 {
-    /// [`Frame::from_normal`] in every lane (the same operations, so the
-    /// same frames bit for bit).
-    #[inline(always)]
-    pub fn from_normal(k: Avx512, n: Vec3x16) -> Self {
-        let one = F32x16::splat(k, 1.0);
-        let sign = one.copysign(n.z);
-        let a = -one / (sign + n.z);
-        let b = n.x * n.y * a;
-        Self {
-            s: Vec3x16::new(one + sign * n.x * n.x * a, sign * b, -sign * n.x),
-            t: Vec3x16::new(b, sign + n.y * n.y * a, -n.y),
-            n,
-        }
-    }
-
-    /// The frames of `frames`, lane `i` from `frames[i]`.
-    #[inline(always)]
-    pub fn from_lanes(k: Avx512, frames: &[Frame; LANES]) -> Self {
-        Self {
-            s: Vec3x16::from_lanes(k, &frames.map(|f| f.s)),
-            t: Vec3x16::from_lanes(k, &frames.map(|f| f.t)),
-            n: Vec3x16::from_lanes(k, &frames.map(|f| f.n)),
-        }
-    }
-
-    #[cfg(test)]
-    /// Lane `lane` as a [`Frame`].
-    #[inline(always)]
-    pub fn lane(&self, lane: usize) -> Frame {
-        Frame {
-            s: self.s.lane(lane),
-            t: self.t.lane(lane),
-            n: self.n.lane(lane),
-        }
-    }
-
-    /// `a` in the lanes of `m`, `b` in the others.
-    #[inline(always)]
-    pub fn select(m: Mask16, a: &Self, b: &Self) -> Self {
-        Self {
-            s: Vec3x16::select(m, a.s, b.s),
-            t: Vec3x16::select(m, a.t, b.t),
-            n: Vec3x16::select(m, a.n, b.n),
-        }
-    }
-
-    /// [`Frame::to_world`] in every lane.
-    #[inline(always)]
-    pub fn to_world(self, v: Vec3x16) -> Vec3x16 {
-        self.s * v.x + self.t * v.y + self.n * v.z
-    }
 }
 
 #[cfg(test)]

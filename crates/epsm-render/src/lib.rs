@@ -5,8 +5,9 @@
 //! and the path records the differentiation side (`epsm-core`) consumes. This
 //! crate knows nothing about derivatives of geometry.
 //!
-//! On x86-64 CPUs with AVX-512 the tracer renders sixteen paths at once, one
-//! per vector lane: the private module `simd` holds the lane types, and a
+//! On x86-64 CPUs with AVX-512 or AVX2 the tracer renders sixteen paths at
+//! once, one per vector lane: the private module `simd` holds the lane types
+//! (generic over an AVX-512, AVX2 or portable backend), and a
 //! `wide` module beside each layer (sampler, BVH, materials, lights, tracer)
 //! its sixteen-lane steps, each lane bit-identical to the scalar step (see
 //! [`tracer`]).

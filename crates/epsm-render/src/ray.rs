@@ -2,9 +2,6 @@
 
 use glam::{Vec3, Vec3A};
 
-#[cfg(target_arch = "x86_64")]
-use crate::simd::{Avx512, F32x16, Vec3x16};
-
 /// A ray `origin + t·dir` for `t` in `[t_min, t_max]`. `dir` need not be unit
 /// (instance traversal keeps `t` by transforming an unnormalised direction),
 /// but rays made by the camera and by sampling are unit.
@@ -61,11 +58,11 @@ pub fn offset_origin(p: Vec3, ng: Vec3) -> Vec3 {
 }
 
 /// Near the origin a float step, elsewhere an integer ULP step.
-const ORIGIN: f32 = 1.0 / 32.0;
+pub(crate) const ORIGIN: f32 = 1.0 / 32.0;
 /// The float step per unit of normal.
-const FLOAT_SCALE: f32 = 1.0 / 65536.0;
+pub(crate) const FLOAT_SCALE: f32 = 1.0 / 65536.0;
 /// ULP steps per unit of normal.
-const INT_SCALE: f32 = 256.0;
+pub(crate) const INT_SCALE: f32 = 256.0;
 
 /// [`offset_origin`] for one coordinate `pc` with normal component `nc`.
 #[cfg_attr(target_arch = "x86_64", cfg(test))]
@@ -113,45 +110,6 @@ fn offset_origin_sse2(p: Vec3, ng: Vec3) -> Vec3 {
         near,
         Vec3A::from(moved),
     ))
-}
-
-/// Sixteen rays, one per lane ([`Ray`]'s fields by lane), for the wide
-/// tracer.
-#[cfg(target_arch = "x86_64")]
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Rays16 {
-    /// Origins.
-    pub origin: Vec3x16,
-    /// Directions (not necessarily unit).
-    pub dir: Vec3x16,
-    /// Start of the `t` ranges.
-    pub t_min: F32x16,
-    /// End of the `t` ranges.
-    pub t_max: F32x16,
-}
-
-/// [`offset_origin`] in sixteen lanes: the operations of
-/// [`offset_origin_sse2`] lane by lane, so the same origins bit for bit.
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-pub(crate) fn offset_origins16(k: Avx512, p: Vec3x16, ng: Vec3x16) -> Vec3x16 {
-    Vec3x16::new(
-        offset_components16(k, p.x, ng.x),
-        offset_components16(k, p.y, ng.y),
-        offset_components16(k, p.z, ng.z),
-    )
-}
-
-/// One coordinate of [`offset_origins16`].
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-fn offset_components16(k: Avx512, pc: F32x16, nc: F32x16) -> F32x16 {
-    let of_i = (nc * k.f32(INT_SCALE)).trunc_i32();
-    let bits = pc.to_bits();
-    let negative = bits.shr_signed(31);
-    let moved = F32x16::from_bits(bits + ((of_i ^ negative) - negative));
-    let near = pc + k.f32(FLOAT_SCALE) * nc;
-    F32x16::select(pc.abs().lt(k.f32(ORIGIN)), near, moved)
 }
 
 #[cfg(test)]
@@ -203,37 +161,6 @@ mod tests {
                 assert_eq!(
                     offset_origin(p, n).to_array().map(f32::to_bits),
                     expected.to_array().map(f32::to_bits)
-                );
-            }
-        }
-    }
-
-    /// The lanes' offsets are the scalar offsets, bit for bit.
-    #[cfg(target_arch = "x86_64")]
-    #[test]
-    fn lane_offsets_are_the_scalar_offsets() {
-        let Some(k) = crate::simd::Avx512::detect() else {
-            eprintln!("no AVX-512 on this CPU: nothing to test");
-            return;
-        };
-        let mut uniform = uniforms(0x2545_F491_4F6C_DD1D);
-        for round in 0..2000 {
-            let scale = [1e-3, 0.02, 1.0, 1e3, 1e6][round % 5];
-            let p: [Vec3; 16] = std::array::from_fn(|i| {
-                let v = (Vec3::new(uniform(), uniform(), uniform()) - 0.5) * 2.0 * scale;
-                if i == 3 { Vec3::new(-0.0, 0.0, v.z) } else { v }
-            });
-            let n: [Vec3; 16] = std::array::from_fn(|_| {
-                (Vec3::new(uniform(), uniform(), uniform()) - 0.5).normalize_or_zero()
-            });
-            let got = offset_origins16(k, Vec3x16::from_lanes(k, &p), Vec3x16::from_lanes(k, &n));
-            for lane in 0..16 {
-                assert_eq!(
-                    got.lane(lane).to_array().map(f32::to_bits),
-                    offset_origin(p[lane], n[lane]).to_array().map(f32::to_bits),
-                    "p {} n {}",
-                    p[lane],
-                    n[lane]
                 );
             }
         }

@@ -1,5 +1,7 @@
 //! The wide tracer against the scalar one: every shipped scene's image is
-//! the same, byte for byte, whatever the thread count.
+//! the same, byte for byte, whatever the thread count, on every lane
+//! backend this CPU has (the portable lanes always; AVX2 and AVX-512 where
+//! the CPU has them, and required where `EPSM_REQUIRE_KERNELS` names them).
 
 use std::path::Path;
 
@@ -16,12 +18,47 @@ fn scene(name: &str) -> Scene {
     load_scene(&path).expect("shipped scene loads")
 }
 
+/// The wide kernels this CPU runs: the portable one always, AVX2 and
+/// AVX-512 where it has them.
+fn wide_kernels() -> Vec<Kernel> {
+    [Kernel::Avx512, Kernel::Avx2, Kernel::Portable]
+        .into_iter()
+        .filter(|k| k.available())
+        .collect()
+}
+
+/// Every wide kernel this CPU advertises runs here (so the comparisons
+/// below exercise it), and every kernel named in `EPSM_REQUIRE_KERNELS`
+/// (comma-separated, as `avx512,avx2`: what `.ci/run` sets from the CPU's
+/// flags) is among them: a machine without a required kernel fails here.
+#[test]
+fn every_kernel_the_cpu_advertises_runs() {
+    let ran: Vec<&str> = wide_kernels().iter().map(|k| k.name()).collect();
+    eprintln!("wide kernels compared with the scalar loop: {ran:?}");
+    assert!(ran.contains(&"portable"));
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::is_x86_feature_detected as has;
+        let avx512 = has!("avx512f") && has!("avx512vl") && has!("avx512dq") && has!("avx512bw");
+        let avx2 = has!("avx2") && has!("bmi1") && has!("bmi2") && has!("lzcnt");
+        assert_eq!(ran.contains(&"avx512"), avx512, "{ran:?}");
+        assert_eq!(ran.contains(&"avx2"), avx2, "{ran:?}");
+    }
+    let required = std::env::var("EPSM_REQUIRE_KERNELS").unwrap_or_default();
+    for name in required.split(',').map(str::trim).filter(|n| !n.is_empty()) {
+        assert!(
+            Kernel::ALL.iter().any(|k| k.name() == name),
+            "EPSM_REQUIRE_KERNELS names an unknown kernel {name:?}"
+        );
+        assert!(
+            ran.contains(&name),
+            "kernel {name} required but not run: {ran:?}"
+        );
+    }
+}
+
 #[test]
 fn shipped_scenes_render_the_same_images_wide_and_scalar() {
-    if !Kernel::wide_available() {
-        eprintln!("no AVX-512 on this CPU: the wide tracer is not used, nothing to compare");
-        return;
-    }
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
     let mut names: Vec<String> = std::fs::read_dir(&dir)
         .expect("scenes/")
@@ -38,28 +75,31 @@ fn shipped_scenes_render_the_same_images_wide_and_scalar() {
             ..RenderOptions::from_scene(&s)
         };
         let scalar = render_with(&s, &opts, Kernel::Scalar, &|_| {});
-        let wide = render_with(&s, &opts, Kernel::Fastest, &|_| {});
-        let (a, b) = (&scalar.image, &wide.image);
-        assert_eq!((a.width, a.height), (b.width, b.height), "{name}");
-        let mut differ = 0;
-        for y in 0..a.height {
-            for x in 0..a.width {
-                let (p, q) = (a.get(x, y), b.get(x, y));
-                if p.to_array().map(f32::to_bits) != q.to_array().map(f32::to_bits) {
-                    if differ < 5 {
-                        eprintln!("{name}: pixel ({x}, {y}) {p} scalar, {q} wide");
+        for kernel in wide_kernels() {
+            let wide = render_with(&s, &opts, kernel, &|_| {});
+            let (a, b) = (&scalar.image, &wide.image);
+            let name = format!("{name} ({})", kernel.name());
+            assert_eq!((a.width, a.height), (b.width, b.height), "{name}");
+            let mut differ = 0;
+            for y in 0..a.height {
+                for x in 0..a.width {
+                    let (p, q) = (a.get(x, y), b.get(x, y));
+                    if p.to_array().map(f32::to_bits) != q.to_array().map(f32::to_bits) {
+                        if differ < 5 {
+                            eprintln!("{name}: pixel ({x}, {y}) {p} scalar, {q} wide");
+                        }
+                        differ += 1;
                     }
-                    differ += 1;
                 }
             }
+            assert_eq!(differ, 0, "{name}: {differ} pixels differ");
+            assert_eq!(scalar.counters, wide.counters, "{name}");
         }
-        assert_eq!(differ, 0, "{name}: {differ} pixels differ");
-        assert_eq!(scalar.counters, wide.counters, "{name}");
     }
 }
 
-/// Renders `scene` with both kernels at each of `spps` and asserts the images
-/// and counters are the same, byte for byte.
+/// Renders `scene` with the scalar and every wide kernel at each of `spps`
+/// and asserts the images and counters are the same, byte for byte.
 fn assert_same_images(name: &str, scene: &Scene, spps: &[u32]) {
     for &spp in spps {
         let opts = RenderOptions {
@@ -67,18 +107,21 @@ fn assert_same_images(name: &str, scene: &Scene, spps: &[u32]) {
             ..RenderOptions::from_scene(scene)
         };
         let scalar = render_with(scene, &opts, Kernel::Scalar, &|_| {});
-        let wide = render_with(scene, &opts, Kernel::Fastest, &|_| {});
-        assert_eq!(scalar.image.pixels.len(), wide.image.pixels.len(), "{name}");
-        let differ = scalar
-            .image
-            .pixels
-            .iter()
-            .zip(&wide.image.pixels)
-            .filter(|(p, q)| p.to_array().map(f32::to_bits) != q.to_array().map(f32::to_bits))
-            .count();
-        assert_eq!(differ, 0, "{name}, {spp} spp: {differ} pixels differ");
-        assert_eq!(scalar.counters, wide.counters, "{name}, {spp} spp");
         assert!(scalar.counters.rays > 0);
+        for kernel in wide_kernels() {
+            let wide = render_with(scene, &opts, kernel, &|_| {});
+            let name = format!("{name} ({})", kernel.name());
+            assert_eq!(scalar.image.pixels.len(), wide.image.pixels.len(), "{name}");
+            let differ = scalar
+                .image
+                .pixels
+                .iter()
+                .zip(&wide.image.pixels)
+                .filter(|(p, q)| p.to_array().map(f32::to_bits) != q.to_array().map(f32::to_bits))
+                .count();
+            assert_eq!(differ, 0, "{name}, {spp} spp: {differ} pixels differ");
+            assert_eq!(scalar.counters, wide.counters, "{name}, {spp} spp");
+        }
     }
 }
 
@@ -88,10 +131,6 @@ fn assert_same_images(name: &str, scene: &Scene, spps: &[u32]) {
 /// spheres than are listed), moved: the same image from both kernels.
 #[test]
 fn every_feature_renders_the_same_image_wide_and_scalar() {
-    if !Kernel::wide_available() {
-        eprintln!("no AVX-512 on this CPU: the wide tracer is not used, nothing to compare");
-        return;
-    }
     let dir = tempfile::tempdir().expect("temp dir");
     let mut sky = Image::new(16, 8);
     for y in 0..8 {

@@ -1,7 +1,7 @@
 //! Many rays or hits at once: [`Accel::closest_hits`],
 //! [`Accel::occluded_rays`] and [`Accel::surface_points`], sixteen at a
-//! time by the wide functions (module `wide`) where the CPU has AVX-512
-//! (detected at run time), else one at a time by the scalar ones
+//! time by the wide functions (module `wide`) where the CPU has AVX-512 or
+//! AVX2 (detected at run time), else one at a time by the scalar ones
 //! ([`Accel::closest_hit`], [`Accel::occluded`], [`Accel::surface_point`]).
 //!
 //! Model: the answers are the scalar walks' for every ray (the wide walks
@@ -14,69 +14,51 @@
 //!
 //! No parameters.
 
+use super::Accel;
 use crate::hit::{Hit, SurfacePoint};
 use crate::ray::Ray;
 use crate::scene::Object;
 #[cfg(target_arch = "x86_64")]
-use crate::{
-    frame::Frame,
-    hit::{Hits16, TexCoords},
-    ray::Rays16,
-    simd::{Avx512, F32x16, LANES, Mask16, Vec3x16},
+use {
+    super::{Hits16, Rays16},
+    crate::frame::Frame,
+    crate::hit::TexCoords,
+    crate::simd::{Backend, F32x16, LANES, Lanes, Mask16, Vec3x16, WithLanes},
+    glam::{Vec2, Vec3},
 };
-#[cfg(target_arch = "x86_64")]
-use glam::{Vec2, Vec3};
-
-use super::Accel;
 
 impl Accel {
     /// The closest hit of each ray (as [`Accel::closest_hit`]), sixteen at
-    /// a time where the CPU has AVX-512 ([`Accel::batches_wide`]).
+    /// a time where the CPU has vector lanes ([`Accel::batches_wide`]).
     pub fn closest_hits(&self, rays: &[Ray]) -> Vec<Option<Hit>> {
         #[cfg(target_arch = "x86_64")]
-        if let Some(k) = Avx512::detect() {
-            let mut out = Vec::with_capacity(rays.len());
-            // SAFETY: `closest_avx512` requires only the features it
-            // enables, and an `Avx512` token exists only on a CPU found to
-            // have each of them.
-            #[allow(unsafe_code)]
-            unsafe {
-                closest_avx512(self, k, rays, &mut out)
-            };
-            return out;
+        if let Some(b) = Backend::fastest() {
+            return b.call(Closest { accel: self, rays });
         }
         rays.iter().map(|ray| self.closest_hit(ray)).collect()
     }
 
     /// Whether each ray is occluded (as [`Accel::occluded`]), sixteen at a
-    /// time where the CPU has AVX-512 ([`Accel::batches_wide`]).
+    /// time where the CPU has vector lanes ([`Accel::batches_wide`]).
     pub fn occluded_rays(&self, rays: &[Ray]) -> Vec<bool> {
         #[cfg(target_arch = "x86_64")]
-        if let Some(k) = Avx512::detect() {
-            let mut out = Vec::with_capacity(rays.len());
-            // SAFETY: as in `closest_hits`.
-            #[allow(unsafe_code)]
-            unsafe {
-                occluded_avx512(self, k, rays, &mut out)
-            };
-            return out;
+        if let Some(b) = Backend::fastest() {
+            return b.call(Occluded { accel: self, rays });
         }
         rays.iter().map(|ray| self.occluded(ray)).collect()
     }
 
     /// The shading point of each hit (as [`Accel::surface_point`]; `objects`
     /// the scene's, as the hits were traced), sixteen at a time where the
-    /// CPU has AVX-512 ([`Accel::batches_wide`]).
+    /// CPU has vector lanes ([`Accel::batches_wide`]).
     pub fn surface_points(&self, objects: &[Object], hits: &[Hit]) -> Vec<SurfacePoint> {
         #[cfg(target_arch = "x86_64")]
-        if let Some(k) = Avx512::detect() {
-            let mut out = Vec::with_capacity(hits.len());
-            // SAFETY: as in `closest_hits`.
-            #[allow(unsafe_code)]
-            unsafe {
-                points_avx512(self, k, objects, hits, &mut out)
-            };
-            return out;
+        if let Some(b) = Backend::fastest() {
+            return b.call(Points {
+                accel: self,
+                objects,
+                hits,
+            });
         }
         hits.iter()
             .map(|hit| self.surface_point(objects, hit))
@@ -85,43 +67,84 @@ impl Accel {
 
     /// Whether [`Accel::closest_hits`], [`Accel::occluded_rays`] and
     /// [`Accel::surface_points`] work sixteen at a time on this CPU (it has
-    /// AVX-512).
+    /// AVX-512 or AVX2).
     pub fn batches_wide() -> bool {
         #[cfg(target_arch = "x86_64")]
-        return Avx512::detect().is_some();
+        return Backend::fastest().is_some();
         #[cfg(not(target_arch = "x86_64"))]
         false
     }
 }
 
-/// [`Accel::closest_hits`] with the wide walk, appending to `out`.
+/// [`Accel::closest_hits`] with the wide walk.
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx512vl,avx512dq,avx512bw,avx2,bmi1,bmi2,lzcnt,popcnt")]
-fn closest_avx512(accel: &Accel, k: Avx512, rays: &[Ray], out: &mut Vec<Option<Hit>>) {
-    for chunk in rays.chunks(LANES) {
-        let (lanes, active) = packet(k, chunk);
-        let hits = accel.closest_hits16(k, &lanes, active).to_lanes();
-        out.extend_from_slice(&hits[..chunk.len()]);
+struct Closest<'a> {
+    accel: &'a Accel,
+    rays: &'a [Ray],
+}
+
+#[cfg(target_arch = "x86_64")]
+impl WithLanes for Closest<'_> {
+    type Output = Vec<Option<Hit>>;
+    #[inline(always)]
+    fn call<B: Lanes>(self, k: B) -> Self::Output {
+        let mut out = Vec::with_capacity(self.rays.len());
+        for chunk in self.rays.chunks(LANES) {
+            let (lanes, active) = packet(k, chunk);
+            let hits = self.accel.closest_hits16(k, &lanes, active).to_lanes();
+            out.extend_from_slice(&hits[..chunk.len()]);
+        }
+        out
     }
 }
 
-/// [`Accel::occluded_rays`] with the wide walk, appending to `out`.
+/// [`Accel::occluded_rays`] with the wide walk.
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx512vl,avx512dq,avx512bw,avx2,bmi1,bmi2,lzcnt,popcnt")]
-fn occluded_avx512(accel: &Accel, k: Avx512, rays: &[Ray], out: &mut Vec<bool>) {
-    for chunk in rays.chunks(LANES) {
-        let (lanes, active) = packet(k, chunk);
-        let occluded = accel.occluded16(k, &lanes, active);
-        out.extend((0..chunk.len()).map(|i| occluded.test(i)));
+struct Occluded<'a> {
+    accel: &'a Accel,
+    rays: &'a [Ray],
+}
+
+#[cfg(target_arch = "x86_64")]
+impl WithLanes for Occluded<'_> {
+    type Output = Vec<bool>;
+    #[inline(always)]
+    fn call<B: Lanes>(self, k: B) -> Self::Output {
+        let mut out = Vec::with_capacity(self.rays.len());
+        for chunk in self.rays.chunks(LANES) {
+            let (lanes, active) = packet(k, chunk);
+            let occluded = self.accel.occluded16(k, &lanes, active);
+            out.extend((0..chunk.len()).map(|i| occluded.test(i)));
+        }
+        out
+    }
+}
+
+/// [`Accel::surface_points`] with the wide points.
+#[cfg(target_arch = "x86_64")]
+struct Points<'a> {
+    accel: &'a Accel,
+    objects: &'a [Object],
+    hits: &'a [Hit],
+}
+
+#[cfg(target_arch = "x86_64")]
+impl WithLanes for Points<'_> {
+    type Output = Vec<SurfacePoint>;
+    #[inline(always)]
+    fn call<B: Lanes>(self, k: B) -> Self::Output {
+        let mut out = Vec::with_capacity(self.hits.len());
+        points(self.accel, k, self.objects, self.hits, &mut out);
+        out
     }
 }
 
 /// [`Accel::surface_points`] with the wide points, appending to `out`.
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx512vl,avx512dq,avx512bw,avx2,bmi1,bmi2,lzcnt,popcnt")]
-fn points_avx512(
+#[inline(always)]
+fn points<B: Lanes>(
     accel: &Accel,
-    k: Avx512,
+    k: B,
     objects: &[Object],
     hits: &[Hit],
     out: &mut Vec<SurfacePoint>,
@@ -168,7 +191,7 @@ fn points_avx512(
 /// found.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-fn hit_packet(k: Avx512, chunk: &[Hit]) -> Hits16 {
+fn hit_packet<B: Lanes>(k: B, chunk: &[Hit]) -> Hits16<B> {
     let mut hits = [None; LANES];
     for (lane, hit) in hits.iter_mut().zip(chunk) {
         *lane = Some(*hit);
@@ -180,7 +203,7 @@ fn hit_packet(k: Avx512, chunk: &[Hit]) -> Hits16 {
 /// of the first, and the mask of the used ones.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-fn packet(k: Avx512, chunk: &[Ray]) -> (Rays16, Mask16) {
+fn packet<B: Lanes>(k: B, chunk: &[Ray]) -> (Rays16<B>, Mask16) {
     // By field: origin x, y, z, direction x, y, z, t_min, t_max.
     let mut fields = [[0.0f32; LANES]; 8];
     for lane in 0..LANES {

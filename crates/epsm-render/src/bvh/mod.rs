@@ -24,7 +24,7 @@
 //!
 //! Many rays at once ([`Accel::closest_hits`], [`Accel::occluded_rays`],
 //! [`Accel::surface_points`], module `batch`) are traced sixteen at a time
-//! where the CPU has AVX-512 (module `wide`: the static BVH walked as a
+//! where the CPU has AVX-512 or AVX2 (module `wide`: the static BVH walked as a
 //! packet from tables built beside it, the listed spheres in `f64` lanes,
 //! instances lane by lane by the scalar code), with the scalar walks'
 //! answers (but for ties, module `wide`).
@@ -73,13 +73,15 @@ use crate::scene::{Mesh, Object, ObjectId, Surface};
 use crate::sphere;
 use blas::Blas;
 use flat::FlatHit;
-#[cfg(target_arch = "x86_64")]
-pub(crate) use node::Avx2;
 use node::TraceRay;
+#[cfg(target_arch = "x86_64")]
+pub(crate) use node::{Avx, Avx2};
 pub(crate) use node::{BoxTest, Portable, SpheresFirst};
 use tlas::{Instance, Tlas, Traced};
 use triangle::PackedTriangle;
 use walk::walk;
+#[cfg(target_arch = "x86_64")]
+pub(crate) use wide::{Frames16, Hits16, Rays16, TexCoords16};
 use world::WorldBlas;
 
 /// Marks an object without an instance.
@@ -779,12 +781,19 @@ mod tests {
     /// portable ones, through the static BVH and through instances.
     #[test]
     fn avx_and_portable_box_tests_agree() {
+        // Without AVX, the portable tests against themselves: the walk's
+        // hit counts are still checked.
         #[cfg(target_arch = "x86_64")]
-        let Some(avx) = Avx::detect() else {
-            return;
-        };
+        match Avx::detect() {
+            Some(avx) => box_tests_agree(avx),
+            None => box_tests_agree(Portable),
+        }
         #[cfg(not(target_arch = "x86_64"))]
-        let avx = Portable;
+        box_tests_agree(Portable);
+    }
+
+    /// [`avx_and_portable_box_tests_agree`] with the box tests `avx`.
+    fn box_tests_agree(avx: impl BoxTest) {
         let mut rng = Rng::new(17);
         let (big, small) = (soup(&mut rng, 3000), soup(&mut rng, 50));
         let objects: Vec<Object> = (0..6)

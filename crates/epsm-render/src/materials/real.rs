@@ -10,14 +10,11 @@
 //! | implementor | constants from | `max` |
 //! |---|---|---|
 //! | every [`num_traits::Float`] (`f32`, `f64`) | `()` | the type's own (`f32::max`) |
-//! | `F32x16` (x86-64) | the `Avx512` token | the lane method |
+//! | `F32x16` (x86-64, `materials::wide`) | the backend's token | the lane method |
 
 use std::ops::{Add, Div, Mul, Sub};
 
 use num_traits::Float;
-
-#[cfg(target_arch = "x86_64")]
-use crate::simd::{Avx512, F32x16};
 
 /// A real number type: one value or sixteen lanes (module docs).
 pub(crate) trait Real:
@@ -57,25 +54,5 @@ impl<T: Float> Real for T {
     #[inline(always)]
     fn max(self, o: Self) -> Self {
         Float::max(self, o)
-    }
-}
-
-#[cfg(target_arch = "x86_64")]
-impl Real for F32x16 {
-    type Token = Avx512;
-
-    #[inline(always)]
-    fn constant(k: Avx512, c: f32) -> Self {
-        F32x16::splat(k, c)
-    }
-
-    #[inline(always)]
-    fn sqrt(self) -> Self {
-        F32x16::sqrt(self)
-    }
-
-    #[inline(always)]
-    fn max(self, o: Self) -> Self {
-        F32x16::max(self, o)
     }
 }

@@ -15,9 +15,9 @@ use super::{
     BLOCK, GOLDEN, MIX_WEYL, MIX64, ONE_MINUS_EPSILON, PERMUTE_MUL, PixelKeys, SAMPLE_STEP,
     STRATIFIED, UNIT, Word, permute,
 };
-use crate::simd::{Avx512, F32x16, Mask16, U32x16, U64x16};
+use crate::simd::{F32x16, Lanes, Mask16, U32x16, U64x16};
 
-impl Word for U32x16 {
+impl<B: Lanes> Word for U32x16<B> {
     #[inline(always)]
     fn times(self, other: Self) -> Self {
         self * other
@@ -42,13 +42,13 @@ pub(crate) struct TileKeys {
 
 /// The first numbers of sixteen samples, one per lane.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Starts16 {
+pub(crate) struct Starts16<B: Lanes> {
     /// The per-sample keys ([`PixelSampler`](super::PixelSampler)'s).
-    pub key: U64x16,
+    pub key: U64x16<B>,
     /// The film position's numbers (dimensions 0 and 1).
-    pub film: [F32x16; 2],
+    pub film: [F32x16<B>; 2],
     /// The first bounce block (dimensions `2 .. 2 + BLOCK`).
-    pub first: [F32x16; BLOCK],
+    pub first: [F32x16<B>; BLOCK],
 }
 
 impl TileKeys {
@@ -81,7 +81,13 @@ impl TileKeys {
     /// Lanes of one pixel use its keys as they are; lanes of several pixels
     /// gather theirs.
     #[inline(always)]
-    pub fn starts16(&self, k: Avx512, pixel: U32x16, sample: U32x16, m: Mask16) -> Starts16 {
+    pub fn starts16<B: Lanes>(
+        &self,
+        k: B,
+        pixel: U32x16<B>,
+        sample: U32x16<B>,
+        m: Mask16,
+    ) -> Starts16<B> {
         let zero64 = k.u64(0);
         let pixel_key = U64x16::gather(&self.key, pixel, m, zero64);
         let key = mix64_16(
@@ -146,14 +152,14 @@ impl TileKeys {
 
 /// `to_unit(mix_weyl(x))` in every lane: the number of a Weyl step.
 #[inline(always)]
-fn unit16(k: Avx512, x: U64x16) -> F32x16 {
+fn unit16<B: Lanes>(k: B, x: U64x16<B>) -> F32x16<B> {
     let bits = (((x ^ (x >> 32)) * k.u64(MIX_WEYL)) >> 32).low_u32();
     F32x16::from_u32(bits >> 8) * k.f32(UNIT)
 }
 
 /// `mix64` in every lane.
 #[inline(always)]
-fn mix64_16(k: Avx512, z: U64x16) -> U64x16 {
+fn mix64_16<B: Lanes>(k: B, z: U64x16<B>) -> U64x16<B> {
     let z = (z ^ (z >> 30)) * k.u64(MIX64[0]);
     let z = (z ^ (z >> 27)) * k.u64(MIX64[1]);
     z ^ (z >> 31)
@@ -162,20 +168,20 @@ fn mix64_16(k: Avx512, z: U64x16) -> U64x16 {
 /// Sixteen lanes' numbers of dimensions `first .. first + BLOCK`, each lane
 /// with its own `first`: the wide [`Block`](super::Block).
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Block16 {
-    numbers: [F32x16; BLOCK],
+pub(crate) struct Block16<B: Lanes> {
+    numbers: [F32x16<B>; BLOCK],
 }
 
-impl Block16 {
+impl<B: Lanes> Block16<B> {
     /// The numbers of dimension `first + offset` (`offset < BLOCK`).
     #[inline(always)]
-    pub fn get_1d(&self, offset: u32) -> F32x16 {
+    pub fn get_1d(&self, offset: u32) -> F32x16<B> {
         self.numbers[offset as usize]
     }
 
     /// The numbers of dimensions `first + offset` and `first + offset + 1`.
     #[inline(always)]
-    pub fn get_2d(&self, offset: u32) -> [F32x16; 2] {
+    pub fn get_2d(&self, offset: u32) -> [F32x16<B>; 2] {
         [self.get_1d(offset), self.get_1d(offset + 1)]
     }
 }
@@ -183,17 +189,17 @@ impl Block16 {
 /// The random streams of sixteen paths, one per lane: what a lane keeps of
 /// its sample's [`Starts16`].
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Streams16 {
+pub(crate) struct Streams16<B: Lanes> {
     /// Each lane's per-sample key ([`PixelSampler`](super::PixelSampler)(super::PixelSampler)'s).
-    pub key: U64x16,
+    pub key: U64x16<B>,
     /// Each lane's first bounce block.
-    pub first: [F32x16; BLOCK],
+    pub first: [F32x16<B>; BLOCK],
 }
 
-impl Streams16 {
+impl<B: Lanes> Streams16<B> {
     /// Streams of key 0 and zero numbers (lanes get theirs as they start).
     #[inline(always)]
-    pub fn new(k: Avx512) -> Self {
+    pub fn new(k: B) -> Self {
         Self {
             key: k.u64(0),
             first: [k.f32(0.0); BLOCK],
@@ -205,7 +211,7 @@ impl Streams16 {
     /// unstratified dimensions from `first` on in the others (a path's later
     /// blocks lie past the stratified dimensions).
     #[inline(always)]
-    pub fn block16(&self, k: Avx512, first: U32x16, first_bounce: Mask16) -> Block16 {
+    pub fn block16(&self, k: B, first: U32x16<B>, first_bounce: Mask16) -> Block16<B> {
         let golden = k.u64(GOLDEN);
         // weyl(key, first) = key + (first + 1)·φ; the next dimensions add φ each.
         let mut x = self.key + (U64x16::from_u32(first) + k.u64(1)) * golden;
@@ -230,58 +236,57 @@ mod tests {
     /// and of several (gathered keys), spp powers of two and not.
     #[test]
     fn lane_numbers_are_the_scalar_numbers() {
-        let Some(k) = Avx512::detect() else {
-            eprintln!("no AVX-512 on this CPU: nothing to test");
-            return;
-        };
-        for spp in [1u32, 7, 16, 64, 100] {
-            let pixels: Vec<u32> = (0..40).map(|p| p * 977 + 3).collect();
-            let keys = TileKeys::new(5, pixels.iter().copied(), spp);
-            for batch in 0..12u64 {
-                let seq: [u64; LANES] = std::array::from_fn(|i| batch * 13 + i as u64);
-                let pixel = seq.map(|s| ((s / u64::from(spp)) % 40) as u32);
-                let sample = seq.map(|s| (s % u64::from(spp)) as u32);
-                let m = Mask16::first(LANES - batch as usize % 3);
-                let px = U32x16::from_array(k, pixel);
-                let starts = keys.starts16(k, px, U32x16::from_array(k, sample), m);
-                let streams = Streams16 {
-                    key: starts.key,
-                    first: starts.first,
-                };
-                for lane in m.lanes() {
-                    let scalar = keys.pixels[pixel[lane] as usize].sampler(sample[lane]);
-                    assert_eq!(starts.key.to_array()[lane], scalar.sample_key);
-                    for d in 0..2 {
-                        assert_eq!(
-                            starts.film[d].lane(lane).to_bits(),
-                            scalar.get_1d(d as u32).to_bits()
-                        );
-                    }
-                }
-                // Lanes at mixed bounces: the first in some, later ones in others.
-                for round in 0..4u32 {
-                    let bounce: [u32; LANES] = std::array::from_fn(|i| (i as u32 + round) % 4);
-                    let first =
-                        bounce.map(|b| STRATIFIED_DIMENSIONS - BLOCK as u32 + b * BLOCK as u32);
-                    let mut first_bounce = Mask16::NONE;
-                    for (lane, &b) in bounce.iter().enumerate() {
-                        first_bounce.0 |= u16::from(b == 0) << lane;
-                    }
-                    let block = streams.block16(k, U32x16::from_array(k, first), first_bounce);
+        fn on<B: Lanes>(k: B) {
+            for spp in [1u32, 7, 16, 64, 100] {
+                let pixels: Vec<u32> = (0..40).map(|p| p * 977 + 3).collect();
+                let keys = TileKeys::new(5, pixels.iter().copied(), spp);
+                for batch in 0..12u64 {
+                    let seq: [u64; LANES] = std::array::from_fn(|i| batch * 13 + i as u64);
+                    let pixel = seq.map(|s| ((s / u64::from(spp)) % 40) as u32);
+                    let sample = seq.map(|s| (s % u64::from(spp)) as u32);
+                    let m = Mask16::first(LANES - batch as usize % 3);
+                    let px = U32x16::from_array(k, pixel);
+                    let starts = keys.starts16(k, px, U32x16::from_array(k, sample), m);
+                    let streams = Streams16 {
+                        key: starts.key,
+                        first: starts.first,
+                    };
                     for lane in m.lanes() {
                         let scalar = keys.pixels[pixel[lane] as usize].sampler(sample[lane]);
-                        let expected = scalar.block(first[lane]);
-                        for offset in 0..BLOCK as u32 {
+                        assert_eq!(starts.key.to_array()[lane], scalar.sample_key);
+                        for d in 0..2 {
                             assert_eq!(
-                                block.get_1d(offset).lane(lane).to_bits(),
-                                expected.get_1d(offset).to_bits(),
-                                "spp {spp}, lane {lane}, dimension {}",
-                                first[lane] + offset
+                                starts.film[d].lane(lane).to_bits(),
+                                scalar.get_1d(d as u32).to_bits()
                             );
+                        }
+                    }
+                    // Lanes at mixed bounces: the first in some, later ones in others.
+                    for round in 0..4u32 {
+                        let bounce: [u32; LANES] = std::array::from_fn(|i| (i as u32 + round) % 4);
+                        let first =
+                            bounce.map(|b| STRATIFIED_DIMENSIONS - BLOCK as u32 + b * BLOCK as u32);
+                        let mut first_bounce = Mask16::NONE;
+                        for (lane, &b) in bounce.iter().enumerate() {
+                            first_bounce.0 |= u16::from(b == 0) << lane;
+                        }
+                        let block = streams.block16(k, U32x16::from_array(k, first), first_bounce);
+                        for lane in m.lanes() {
+                            let scalar = keys.pixels[pixel[lane] as usize].sampler(sample[lane]);
+                            let expected = scalar.block(first[lane]);
+                            for offset in 0..BLOCK as u32 {
+                                assert_eq!(
+                                    block.get_1d(offset).lane(lane).to_bits(),
+                                    expected.get_1d(offset).to_bits(),
+                                    "spp {spp}, lane {lane}, dimension {}",
+                                    first[lane] + offset
+                                );
+                            }
                         }
                     }
                 }
             }
         }
+        crate::simd::each_backend!(on);
     }
 }

@@ -1,163 +1,45 @@
-//! Sixteen `f32` lanes, and the lane masks every lane type's comparisons
-//! return.
+//! Sixteen `f32` lanes.
 
-use std::arch::x86_64::*;
-use std::ops::{BitAnd, BitOr, BitXor, Not};
+use super::{Cmp, F64x16, LANES, Lanes, Mask16, U32x16};
 
-use super::{Avx512, F64x16, LANES, U32x16};
-
-/// Sixteen `f32` lanes (module docs of `simd`).
+/// Sixteen `f32` lanes (module docs of `simd`): the backend's register and
+/// its token.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct F32x16(pub(super) __m512);
+pub(crate) struct F32x16<B: Lanes>(pub(super) B::F32, pub(super) B);
 
-/// One bit per lane: bit `i` set when lane `i` is selected. A plain `u16`,
-/// so masks need no token and cost no vector register.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub(crate) struct Mask16(pub u16);
-
-impl Mask16 {
-    /// No lane.
-    pub const NONE: Self = Self(0);
-    /// Every lane.
-    pub const ALL: Self = Self(u16::MAX);
-
-    /// Lanes `0..n` (`n ≤ 16`).
-    #[inline(always)]
-    pub fn first(n: usize) -> Self {
-        debug_assert!(n <= LANES);
-        Self(((1u32 << n) - 1) as u16)
-    }
-
-    /// The lowest `n` lanes of `self` (all of them when it has fewer).
-    #[inline(always)]
-    pub fn first_of(self, n: u32) -> Self {
-        let mut bits = self.0;
-        let mut out = 0u16;
-        for _ in 0..n.min(LANES as u32) {
-            let lowest = bits & bits.wrapping_neg();
-            out |= lowest;
-            bits ^= lowest;
-        }
-        Self(out)
-    }
-
-    /// Whether any lane is set.
-    #[inline(always)]
-    pub fn any(self) -> bool {
-        self.0 != 0
-    }
-
-    /// Whether every lane is set.
-    #[inline(always)]
-    pub fn all(self) -> bool {
-        self.0 == u16::MAX
-    }
-
-    /// Whether lane `lane` is set.
-    #[inline(always)]
-    pub fn test(self, lane: usize) -> bool {
-        self.0 >> (lane & (LANES - 1)) & 1 != 0
-    }
-
-    /// How many lanes are set.
-    #[inline(always)]
-    pub fn count(self) -> u32 {
-        self.0.count_ones()
-    }
-
-    /// The lanes set, lowest first.
-    #[inline(always)]
-    pub fn lanes(self) -> impl Iterator<Item = usize> {
-        let mut bits = self.0;
-        std::iter::from_fn(move || {
-            (bits != 0).then(|| {
-                let lane = bits.trailing_zeros() as usize;
-                bits &= bits - 1;
-                lane
-            })
-        })
-    }
-
-    /// Lanes of `self` not in `other`.
-    #[inline(always)]
-    pub fn and_not(self, other: Self) -> Self {
-        Self(self.0 & !other.0)
-    }
-
-    /// Panics unless `len ≥ self.count()`: that a slice of `len` values
-    /// holds enough for an expanding load into the lanes of `self` (the
-    /// `expand_from` methods).
-    #[inline(always)]
-    pub(super) fn assert_expand_len(self, len: usize) {
-        assert!(
-            len >= self.count() as usize,
-            "expanding load past the slice"
-        );
-    }
-}
-
-impl BitAnd for Mask16 {
-    type Output = Self;
-    #[inline(always)]
-    fn bitand(self, o: Self) -> Self {
-        Self(self.0 & o.0)
-    }
-}
-
-impl BitOr for Mask16 {
-    type Output = Self;
-    #[inline(always)]
-    fn bitor(self, o: Self) -> Self {
-        Self(self.0 | o.0)
-    }
-}
-
-impl BitXor for Mask16 {
-    type Output = Self;
-    #[inline(always)]
-    fn bitxor(self, o: Self) -> Self {
-        Self(self.0 ^ o.0)
-    }
-}
-
-impl Not for Mask16 {
-    type Output = Self;
-    #[inline(always)]
-    fn not(self) -> Self {
-        Self(!self.0)
-    }
-}
-
-binary!(one F32x16;
-    Add, add, _mm512_add_ps;
-    Sub, sub, _mm512_sub_ps;
-    Mul, mul, _mm512_mul_ps;
-    Div, div, _mm512_div_ps;
+binary!(F32x16;
+    Add, add, f32_add;
+    Sub, sub, f32_sub;
+    Mul, mul, f32_mul;
+    Div, div, f32_div;
 );
 
-negate!(one F32x16; _mm512_xor_ps, _mm512_set1_ps);
+impl<B: Lanes> std::ops::Neg for F32x16<B> {
+    type Output = Self;
+    /// Flips the sign bit, as scalar negation does.
+    #[inline(always)]
+    fn neg(self) -> Self {
+        Self(self.1.f32_neg(self.0), self.1)
+    }
+}
 
-impl F32x16 {
+impl<B: Lanes> F32x16<B> {
     /// Every lane `x`.
     #[inline(always)]
-    pub fn splat(_: Avx512, x: f32) -> Self {
-        Self(avx!(_mm512_set1_ps(x)))
+    pub fn splat(k: B, x: f32) -> Self {
+        Self(k.f32_splat(x), k)
     }
 
     /// Lane `i` is `lanes[i]`.
     #[inline(always)]
-    pub fn from_array(_: Avx512, lanes: [f32; LANES]) -> Self {
-        // `loadu` reads the sixteen `f32` of `lanes` (unaligned is allowed).
-        Self(avx!(_mm512_loadu_ps(lanes.as_ptr())))
+    pub fn from_array(k: B, lanes: [f32; LANES]) -> Self {
+        Self(k.f32_load(lanes), k)
     }
 
     /// The lanes as an array.
     #[inline(always)]
     pub fn to_array(self) -> [f32; LANES] {
-        let mut out = [0.0; LANES];
-        // `storeu` writes the sixteen `f32` of `out`.
-        avx!(_mm512_storeu_ps(out.as_mut_ptr(), self.0));
-        out
+        self.1.f32_store(self.0)
     }
 
     /// Lane `lane` (`< 16`).
@@ -169,25 +51,25 @@ impl F32x16 {
     /// Square root.
     #[inline(always)]
     pub fn sqrt(self) -> Self {
-        Self(avx!(_mm512_sqrt_ps(self.0)))
+        Self(self.1.f32_sqrt(self.0), self.1)
     }
 
     /// Absolute value (sign bit cleared).
     #[inline(always)]
     pub fn abs(self) -> Self {
-        Self(avx!(_mm512_abs_ps(self.0)))
+        Self(self.1.f32_abs(self.0), self.1)
     }
 
     /// `if self < o { self } else { o }` (module docs).
     #[inline(always)]
     pub fn min(self, o: Self) -> Self {
-        Self(avx!(_mm512_min_ps(self.0, o.0)))
+        Self(self.1.f32_min(self.0, o.0), self.1)
     }
 
     /// `if self > o { self } else { o }` (module docs).
     #[inline(always)]
     pub fn max(self, o: Self) -> Self {
-        Self(avx!(_mm512_max_ps(self.0, o.0)))
+        Self(self.1.f32_max(self.0, o.0), self.1)
     }
 
     clamp!("f32");
@@ -195,79 +77,64 @@ impl F32x16 {
     /// `a` in the lanes of `m`, `b` in the others.
     #[inline(always)]
     pub fn select(m: Mask16, a: Self, b: Self) -> Self {
-        Self(avx!(_mm512_mask_blend_ps(m.0, b.0, a.0)))
+        Self(a.1.f32_select(m, a.0, b.0), a.1)
     }
 
     /// The magnitude of `self` with the sign bit of `sign`.
     #[inline(always)]
     pub fn copysign(self, sign: Self) -> Self {
-        // Ternary logic 0xCA (`a ? b : c` bitwise): bits of `sign` where the sign mask is set, of
-        // `self` elsewhere.
-        let bits = avx!(_mm512_ternarylogic_epi32::<0xCA>(
-            _mm512_castps_si512(_mm512_set1_ps(-0.0)),
-            _mm512_castps_si512(sign.0),
-            _mm512_castps_si512(self.0),
-        ));
-        Self(avx!(_mm512_castsi512_ps(bits)))
+        Self(self.1.f32_copysign(self.0, sign.0), self.1)
     }
 
-    compare! { one _mm512_cmp_ps_mask;
+    compare! { f32_cmp;
         /// `self < o` (false on NaN).
-        lt, _CMP_LT_OQ;
+        lt, Lt;
         /// `self <= o` (false on NaN).
-        le, _CMP_LE_OQ;
+        le, Le;
         /// `self > o` (false on NaN).
-        gt, _CMP_GT_OQ;
+        gt, Gt;
         /// `self >= o` (false on NaN).
-        ge, _CMP_GE_OQ;
+        ge, Ge;
         /// `self == o` (false on NaN).
-        eq, _CMP_EQ_OQ;
+        eq, Eq;
     }
 
     /// Lanes neither infinite nor NaN.
     #[inline(always)]
     pub fn is_finite(self) -> Mask16 {
-        Mask16(avx!(_mm512_cmp_ps_mask::<_CMP_LT_OQ>(
-            _mm512_abs_ps(self.0),
-            _mm512_set1_ps(f32::INFINITY),
-        )))
+        self.abs().lt(Self::splat(self.1, f32::INFINITY))
     }
 
     /// The lanes' bit patterns.
     #[inline(always)]
-    pub fn to_bits(self) -> U32x16 {
-        U32x16(avx!(_mm512_castps_si512(self.0)))
+    pub fn to_bits(self) -> U32x16<B> {
+        U32x16(self.1.f32_to_bits(self.0), self.1)
     }
 
     /// Lanes with the bit patterns of `bits`.
     #[inline(always)]
-    pub fn from_bits(bits: U32x16) -> Self {
-        Self(avx!(_mm512_castsi512_ps(bits.0)))
+    pub fn from_bits(bits: U32x16<B>) -> Self {
+        Self(bits.1.f32_from_bits(bits.0), bits.1)
     }
 
     /// `u as f32` per lane (rounded to nearest).
     #[inline(always)]
-    pub fn from_u32(u: U32x16) -> Self {
-        Self(avx!(_mm512_cvtepu32_ps(u.0)))
+    pub fn from_u32(u: U32x16<B>) -> Self {
+        Self(u.1.f32_from_u32(u.0), u.1)
     }
 
     /// `self as i32` per lane for finite lanes in `i32`'s range (truncated
     /// toward zero), as `u32` bit patterns; other lanes give `i32::MIN`
     /// (Rust's `as` saturates instead: callers keep to the range).
     #[inline(always)]
-    pub fn trunc_i32(self) -> U32x16 {
-        U32x16(avx!(_mm512_cvttps_epi32(self.0)))
+    pub fn trunc_i32(self) -> U32x16<B> {
+        U32x16(self.1.f32_trunc_i32(self.0), self.1)
     }
 
     /// The lanes widened to `f64` (exact).
     #[inline(always)]
-    pub fn to_f64(self) -> F64x16 {
-        avx!(F64x16([
-            _mm512_cvtps_pd(_mm512_castps512_ps256(self.0)),
-            _mm512_cvtps_pd(_mm256_castpd_ps(_mm512_extractf64x4_pd::<1>(
-                _mm512_castps_pd(self.0)
-            ))),
-        ]))
+    pub fn to_f64(self) -> F64x16<B> {
+        F64x16(self.1.f32_to_f64(self.0), self.1)
     }
 
     /// `table[index]` in the lanes of `m`, `fallback` in the others.
@@ -275,29 +142,28 @@ impl F32x16 {
     /// # Panics
     /// If an index of a lane in `m` is out of bounds.
     #[inline(always)]
-    pub fn gather(table: &[f32], index: U32x16, m: Mask16, fallback: Self) -> Self {
+    #[allow(unsafe_code)]
+    pub fn gather(table: &[f32], index: U32x16<B>, m: Mask16, fallback: Self) -> Self {
         index.assert_gather_indices(m, table.len());
-        // Every lane read (those of `m`) indexes `table` in bounds (asserted
-        // above, and below `i32::MAX`, so the signed indices are the same).
-        Self(avx!(_mm512_mask_i32gather_ps::<4>(
-            fallback.0,
-            m.0,
-            index.0,
-            table.as_ptr()
-        )))
+        // SAFETY: every lane of `m` indexes `table` in bounds, below
+        // `i32::MAX` (asserted above).
+        Self(
+            unsafe { index.1.f32_gather(table, index.0, m, fallback.0) },
+            index.1,
+        )
     }
 
-    /// Lane `i` is lane `index[i] % 16` of `self` (one `vpermps`).
+    /// Lane `i` is lane `index[i] % 16` of `self`.
     #[inline(always)]
-    pub fn permute(self, index: U32x16) -> Self {
-        Self(avx!(_mm512_permutexvar_ps(index.0, self.0)))
+    pub fn permute(self, index: U32x16<B>) -> Self {
+        Self(self.1.f32_permute(self.0, index.0), self.1)
     }
 
     /// The smallest of the lanes of `m` (`+∞` without any), for orderings
     /// only: which lane a NaN or a `±0` tie yields is unspecified.
     #[inline(always)]
     pub fn reduce_min(self, m: Mask16) -> f32 {
-        avx!(_mm512_mask_reduce_min_ps(m.0, self.0))
+        self.1.f32_reduce_min(self.0, m)
     }
 
     /// `self` with the lanes of `m` replaced by `src[0]`, `src[1]`, … in
@@ -306,9 +172,10 @@ impl F32x16 {
     /// # Panics
     /// If `src` holds fewer values than `m` has lanes.
     #[inline(always)]
+    #[allow(unsafe_code)]
     pub fn expand_from(self, m: Mask16, src: &[f32]) -> Self {
         m.assert_expand_len(src.len());
-        // Reads `m.count()` consecutive `f32`s from `src`, in bounds (asserted).
-        Self(avx!(_mm512_mask_expandloadu_ps(self.0, m.0, src.as_ptr())))
+        // SAFETY: `src` holds at least `m.count()` values (asserted above).
+        Self(unsafe { self.1.f32_expand(self.0, m, src) }, self.1)
     }
 }

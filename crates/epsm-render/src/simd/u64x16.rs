@@ -1,84 +1,60 @@
-//! Sixteen `u64` lanes in two registers (wrapping arithmetic, as
-//! `u64::wrapping_*`), for the sampler's 64-bit hashes.
+//! Sixteen `u64` lanes (wrapping arithmetic, as `u64::wrapping_*`), for the
+//! sampler's 64-bit hashes.
 
-use std::arch::x86_64::*;
 use std::ops::Shr;
 
-use super::{Avx512, LANES, Mask16, U32x16};
+use super::{LANES, Lanes, Mask16, U32x16};
 
-/// Sixteen `u64` lanes: lanes 0–7 in the first register, 8–15 in the
-/// second (module docs of `simd`).
+/// Sixteen `u64` lanes (module docs of `simd`): the backend's register and
+/// its token.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct U64x16(pub(super) [__m512i; 2]);
+pub(crate) struct U64x16<B: Lanes>(pub(super) B::U64, pub(super) B);
 
-binary!(two U64x16;
-    Add, add, _mm512_add_epi64;
-    Mul, mul, _mm512_mullo_epi64;
-    BitXor, bitxor, _mm512_xor_si512;
+binary!(U64x16;
+    Add, add, u64_add;
+    Mul, mul, u64_mul;
+    BitXor, bitxor, u64_xor;
 );
 
-impl Shr<u32> for U64x16 {
+impl<B: Lanes> Shr<u32> for U64x16<B> {
     type Output = Self;
     /// Logical shift right of every lane by `n` (`≥ 64` gives 0).
     #[inline(always)]
     fn shr(self, n: u32) -> Self {
-        let n = avx!(_mm512_set1_epi64(i64::from(n)));
-        Self([
-            avx!(_mm512_srlv_epi64(self.0[0], n)),
-            avx!(_mm512_srlv_epi64(self.0[1], n)),
-        ])
+        Self(self.1.u64_shr(self.0, n), self.1)
     }
 }
 
-impl U64x16 {
+impl<B: Lanes> U64x16<B> {
     /// Every lane `x`.
     #[inline(always)]
-    pub fn splat(_: Avx512, x: u64) -> Self {
-        let v = avx!(_mm512_set1_epi64(x as i64));
-        Self([v, v])
+    pub fn splat(k: B, x: u64) -> Self {
+        Self(k.u64_splat(x), k)
     }
 
     #[cfg(test)]
     /// Lane `i` is `lanes[i]`.
     #[inline(always)]
-    pub fn from_array(_: Avx512, lanes: [u64; LANES]) -> Self {
-        // Each `loadu` reads eight of the sixteen `u64` of `lanes`.
-        Self([
-            avx!(_mm512_loadu_si512(lanes.as_ptr().cast())),
-            avx!(_mm512_loadu_si512(lanes[8..].as_ptr().cast())),
-        ])
+    pub fn from_array(k: B, lanes: [u64; LANES]) -> Self {
+        Self(k.u64_load(lanes), k)
     }
 
     /// The lanes as an array.
     #[inline(always)]
     pub fn to_array(self) -> [u64; LANES] {
-        let mut out = [0; LANES];
-        // Each `storeu` writes eight of the sixteen `u64` of `out`.
-        avx!(_mm512_storeu_si512(out.as_mut_ptr().cast(), self.0[0]));
-        avx!(_mm512_storeu_si512(out[8..].as_mut_ptr().cast(), self.0[1]));
-        out
+        self.1.u64_store(self.0)
     }
 
     /// Each lane of `u` zero-extended.
     #[inline(always)]
-    pub fn from_u32(u: U32x16) -> Self {
-        Self([
-            avx!(_mm512_cvtepu32_epi64(_mm512_castsi512_si256(u.0))),
-            avx!(_mm512_cvtepu32_epi64(_mm512_extracti64x4_epi64::<1>(u.0))),
-        ])
+    pub fn from_u32(u: U32x16<B>) -> Self {
+        Self(u.1.u64_from_u32(u.0), u.1)
     }
 
     /// The low 32 bits of each lane (`as u32`).
     #[inline(always)]
-    pub fn low_u32(self) -> U32x16 {
-        let (lo, hi) = (
-            avx!(_mm512_cvtepi64_epi32(self.0[0])),
-            avx!(_mm512_cvtepi64_epi32(self.0[1])),
-        );
-        U32x16(avx!(_mm512_inserti64x4::<1>(
-            _mm512_castsi256_si512(lo),
-            hi
-        )))
+    pub fn low_u32(self) -> U32x16<B> {
+        U32x16(self.1.u64_low_u32(self.0), self.1)
     }
 
     /// `self` with the lanes of `m` replaced by `src[0]`, `src[1]`, … in
@@ -87,25 +63,11 @@ impl U64x16 {
     /// # Panics
     /// If `src` holds fewer values than `m` has lanes.
     #[inline(always)]
+    #[allow(unsafe_code)]
     pub fn expand_from(self, m: Mask16, src: &[u64]) -> Self {
         m.assert_expand_len(src.len());
-        let (lo, hi) = (m.0 as u8, (m.0 >> 8) as u8);
-        let rest = &src[lo.count_ones() as usize..];
-        // Each load reads as many consecutive `u64`s as its half of `m` has
-        // lanes: `src` from 0, then from the first half's count, both in
-        // bounds (asserted).
-        Self([
-            avx!(_mm512_mask_expandloadu_epi64(
-                self.0[0],
-                lo,
-                src.as_ptr().cast()
-            )),
-            avx!(_mm512_mask_expandloadu_epi64(
-                self.0[1],
-                hi,
-                rest.as_ptr().cast()
-            )),
-        ])
+        // SAFETY: `src` holds at least `m.count()` values (asserted above).
+        Self(unsafe { self.1.u64_expand(self.0, m, src) }, self.1)
     }
 
     /// `table[index]` in the lanes of `m`, `fallback` in the others.
@@ -113,24 +75,14 @@ impl U64x16 {
     /// # Panics
     /// If an index of a lane in `m` is out of bounds.
     #[inline(always)]
-    pub fn gather(table: &[u64], index: U32x16, m: Mask16, fallback: Self) -> Self {
+    #[allow(unsafe_code)]
+    pub fn gather(table: &[u64], index: U32x16<B>, m: Mask16, fallback: Self) -> Self {
         index.assert_gather_indices(m, table.len());
-        let (lo, hi) = (m.0 as u8, (m.0 >> 8) as u8);
-        // Every lane read (those of `m`) indexes `table` in bounds (asserted
-        // above, and below `i32::MAX`, so the signed indices are the same).
-        Self([
-            avx!(_mm512_mask_i32gather_epi64::<8>(
-                fallback.0[0],
-                lo,
-                _mm512_castsi512_si256(index.0),
-                table.as_ptr().cast()
-            )),
-            avx!(_mm512_mask_i32gather_epi64::<8>(
-                fallback.0[1],
-                hi,
-                _mm512_extracti64x4_epi64::<1>(index.0),
-                table.as_ptr().cast()
-            )),
-        ])
+        // SAFETY: every lane of `m` indexes `table` in bounds, below
+        // `i32::MAX` (asserted above).
+        Self(
+            unsafe { index.1.u64_gather(table, index.0, m, fallback.0) },
+            index.1,
+        )
     }
 }

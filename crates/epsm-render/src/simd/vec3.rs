@@ -5,17 +5,17 @@ use std::ops::{Add, Mul, Neg, Sub};
 
 use glam::Vec3;
 
-use super::{Avx512, F32x16, LANES, Mask16};
+use super::{F32x16, LANES, Lanes, Mask16};
 
 /// Sixteen 3-vectors, one per lane, stored by component.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Vec3x16 {
-    pub x: F32x16,
-    pub y: F32x16,
-    pub z: F32x16,
+pub(crate) struct Vec3x16<B: Lanes> {
+    pub x: F32x16<B>,
+    pub y: F32x16<B>,
+    pub z: F32x16<B>,
 }
 
-impl Add for Vec3x16 {
+impl<B: Lanes> Add for Vec3x16<B> {
     type Output = Self;
     #[inline(always)]
     fn add(self, o: Self) -> Self {
@@ -23,7 +23,7 @@ impl Add for Vec3x16 {
     }
 }
 
-impl Sub for Vec3x16 {
+impl<B: Lanes> Sub for Vec3x16<B> {
     type Output = Self;
     #[inline(always)]
     fn sub(self, o: Self) -> Self {
@@ -31,7 +31,7 @@ impl Sub for Vec3x16 {
     }
 }
 
-impl Mul for Vec3x16 {
+impl<B: Lanes> Mul for Vec3x16<B> {
     type Output = Self;
     /// Component by component.
     #[inline(always)]
@@ -40,16 +40,16 @@ impl Mul for Vec3x16 {
     }
 }
 
-impl Mul<F32x16> for Vec3x16 {
+impl<B: Lanes> Mul<F32x16<B>> for Vec3x16<B> {
     type Output = Self;
     /// Every component times the lane's scalar (`Vec3 * f32`).
     #[inline(always)]
-    fn mul(self, s: F32x16) -> Self {
+    fn mul(self, s: F32x16<B>) -> Self {
         Self::new(self.x * s, self.y * s, self.z * s)
     }
 }
 
-impl Neg for Vec3x16 {
+impl<B: Lanes> Neg for Vec3x16<B> {
     type Output = Self;
     #[inline(always)]
     fn neg(self) -> Self {
@@ -57,16 +57,16 @@ impl Neg for Vec3x16 {
     }
 }
 
-impl Vec3x16 {
+impl<B: Lanes> Vec3x16<B> {
     /// The vectors with components `x`, `y`, `z`.
     #[inline(always)]
-    pub fn new(x: F32x16, y: F32x16, z: F32x16) -> Self {
+    pub fn new(x: F32x16<B>, y: F32x16<B>, z: F32x16<B>) -> Self {
         Self { x, y, z }
     }
 
     /// Every lane `v`.
     #[inline(always)]
-    pub fn splat(k: Avx512, v: Vec3) -> Self {
+    pub fn splat(k: B, v: Vec3) -> Self {
         Self::new(
             F32x16::splat(k, v.x),
             F32x16::splat(k, v.y),
@@ -76,7 +76,7 @@ impl Vec3x16 {
 
     /// Lane `i` is `lanes[i]`.
     #[inline(always)]
-    pub fn from_lanes(k: Avx512, lanes: &[Vec3; LANES]) -> Self {
+    pub fn from_lanes(k: B, lanes: &[Vec3; LANES]) -> Self {
         Self::new(
             F32x16::from_array(k, lanes.map(|v| v.x)),
             F32x16::from_array(k, lanes.map(|v| v.y)),
@@ -99,7 +99,7 @@ impl Vec3x16 {
 
     /// Every component divided by the lane's scalar (`Vec3 / f32`).
     #[inline(always)]
-    pub fn div(self, s: F32x16) -> Self {
+    pub fn div(self, s: F32x16<B>) -> Self {
         Self::new(self.x / s, self.y / s, self.z / s)
     }
 
@@ -115,38 +115,38 @@ impl Vec3x16 {
 
     /// `(x·x' + y·y') + z·z'`, glam's order.
     #[inline(always)]
-    pub fn dot(self, o: Self) -> F32x16 {
+    pub fn dot(self, o: Self) -> F32x16<B> {
         self.x * o.x + self.y * o.y + self.z * o.z
     }
 
     /// `dot(self, self)`.
     #[inline(always)]
-    pub fn length_squared(self) -> F32x16 {
+    pub fn length_squared(self) -> F32x16<B> {
         self.dot(self)
     }
 
     /// `sqrt(dot(self, self))`.
     #[inline(always)]
-    pub fn length(self) -> F32x16 {
+    pub fn length(self) -> F32x16<B> {
         self.length_squared().sqrt()
     }
 
     /// glam's `normalize`: `self * (1 / length)`.
     #[inline(always)]
-    pub fn normalize(self, k: Avx512) -> Self {
+    pub fn normalize(self, k: B) -> Self {
         self * (F32x16::splat(k, 1.0) / self.length())
     }
 
     /// `max(x, max(y, z))` with `max(a, b) = if a > b { a } else { b }`
     /// (glam's `max_element`).
     #[inline(always)]
-    pub fn max_element(self) -> F32x16 {
+    pub fn max_element(self) -> F32x16<B> {
         self.x.max(self.y.max(self.z))
     }
 
     /// Lanes equal to the zero vector (`== Vec3::ZERO`, so `−0` counts).
     #[inline(always)]
-    pub fn is_zero(self, k: Avx512) -> Mask16 {
+    pub fn is_zero(self, k: B) -> Mask16 {
         let zero = F32x16::splat(k, 0.0);
         self.x.eq(zero) & self.y.eq(zero) & self.z.eq(zero)
     }

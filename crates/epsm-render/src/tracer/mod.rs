@@ -12,8 +12,9 @@
 //! lobe choice, direction (2), Russian roulette (the `DIM_*` offsets).
 //!
 //! Two bounce loops ([`Kernel`]): the scalar one (module `path`) traces one
-//! path at a time and records paths; the wide one (module `wide`, CPUs
-//! with AVX-512) traces sixteen paths at once, one per vector lane, with the
+//! path at a time and records paths; the wide one (module `wide`, on
+//! AVX-512, AVX2 or portable lanes) traces sixteen paths at once, one per
+//! vector lane, with the
 //! same operations in every lane, so it renders the same image. Images
 //! ([`render`]) come from the wide loop where the CPU has it; records
 //! ([`render_recorded`], [`trace_samples`]) and ray logs ([`render_logged`])
@@ -194,25 +195,77 @@ pub struct PixelSample {
 /// Which bounce loop renders an image.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Kernel {
-    /// The wide tracer (sixteen paths per AVX-512 instruction) where the
-    /// CPU has AVX-512, else the scalar one: the same image either way
-    /// (module `wide`), the wide one faster.
+    /// The fastest this CPU has: the wide tracer on AVX-512 lanes, else on
+    /// AVX2 lanes, else the scalar loop. The same image whichever runs
+    /// (module `wide`).
     #[default]
     Fastest,
+    /// The wide tracer, sixteen paths per AVX-512 instruction.
+    Avx512,
+    /// The wide tracer on AVX2: sixteen lanes as two 8-lane halves.
+    Avx2,
+    /// The wide tracer on plain arrays (any x86-64 CPU): the reference the
+    /// vector lanes are tested against.
+    Portable,
     /// One path at a time, on every CPU (the reference the wide tracer is
     /// tested against).
     Scalar,
 }
 
 impl Kernel {
-    /// Whether [`Kernel::Fastest`] runs the wide tracer on this CPU.
-    pub fn wide_available() -> bool {
-        #[cfg(target_arch = "x86_64")]
-        {
-            crate::simd::Avx512::detect().is_some()
+    /// Every kernel that names one loop (all but [`Kernel::Fastest`]).
+    pub const ALL: [Kernel; 4] = [Self::Avx512, Self::Avx2, Self::Portable, Self::Scalar];
+
+    /// The kernel's name, as `epsm bench render --kernel` takes it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Fastest => "fastest",
+            Self::Avx512 => "avx512",
+            Self::Avx2 => "avx2",
+            Self::Portable => "portable",
+            Self::Scalar => "scalar",
         }
-        #[cfg(not(target_arch = "x86_64"))]
-        false
+    }
+
+    /// Whether this CPU can run it.
+    pub fn available(self) -> bool {
+        match self {
+            Self::Fastest | Self::Scalar => true,
+            #[cfg(target_arch = "x86_64")]
+            _ => self.backend().is_some(),
+            #[cfg(not(target_arch = "x86_64"))]
+            _ => false,
+        }
+    }
+
+    /// The kernel that runs for `self` on this CPU: [`Kernel::Fastest`]
+    /// resolved, the others themselves.
+    pub fn resolve(self) -> Kernel {
+        match self {
+            #[cfg(target_arch = "x86_64")]
+            Self::Fastest => match crate::simd::Backend::fastest() {
+                Some(crate::simd::Backend::Avx512(_)) => Self::Avx512,
+                Some(crate::simd::Backend::Avx2(_)) => Self::Avx2,
+                _ => Self::Scalar,
+            },
+            #[cfg(not(target_arch = "x86_64"))]
+            Self::Fastest => Self::Scalar,
+            other => other,
+        }
+    }
+
+    /// The lane backend of the wide tracer for this kernel (`None`: the
+    /// scalar loop).
+    #[cfg(target_arch = "x86_64")]
+    fn backend(self) -> Option<crate::simd::Backend> {
+        use crate::simd::{Avx512, Backend, Portable};
+        match self {
+            Self::Fastest => Backend::fastest(),
+            Self::Avx512 => Avx512::detect().map(Backend::Avx512),
+            Self::Avx2 => Avx2::detect().map(Backend::Avx2),
+            Self::Portable => Some(Backend::Portable(Portable)),
+            Self::Scalar => None,
+        }
     }
 }
 
@@ -227,21 +280,21 @@ pub fn render(
 }
 
 /// [`render`] with the bounce loop `kernel`.
+///
+/// # Panics
+/// If this CPU cannot run `kernel` ([`Kernel::available`]).
 pub fn render_with(
     scene: &Scene,
     opts: &RenderOptions,
     kernel: Kernel,
     progress: &(dyn Fn(u64) + Sync),
 ) -> RenderOutput {
-    render_tiles(
-        scene,
-        opts,
-        None,
-        kernel == Kernel::Fastest,
-        false,
-        progress,
-    )
-    .0
+    assert!(
+        kernel.available(),
+        "kernel {} is not available on this CPU",
+        kernel.name()
+    );
+    render_tiles(scene, opts, None, kernel, false, progress).0
 }
 
 /// Renders the scene and logs every ray it casts ([`RayLog`]). The image is
@@ -252,7 +305,7 @@ pub fn render_logged(
     opts: &RenderOptions,
     progress: &(dyn Fn(u64) + Sync),
 ) -> (RenderOutput, RayLog) {
-    let (out, _, rays) = render_tiles(scene, opts, None, false, true, progress);
+    let (out, _, rays) = render_tiles(scene, opts, None, Kernel::Scalar, true, progress);
     (out, rays)
 }
 
@@ -265,7 +318,7 @@ pub fn render_recorded(
     level: RecordLevel,
     progress: &(dyn Fn(u64) + Sync),
 ) -> (RenderOutput, Vec<PathRecord>) {
-    let (out, records, _) = render_tiles(scene, opts, Some(level), false, false, progress);
+    let (out, records, _) = render_tiles(scene, opts, Some(level), Kernel::Scalar, false, progress);
     (out, records)
 }
 
@@ -300,13 +353,13 @@ pub fn trace_samples(
 }
 
 /// Renders the tiles in parallel: the image, with the records at `level`,
-/// and with `log` the rays cast; with `wide`, by the wide tracer where the
-/// CPU has it (images only: no records, no ray log).
+/// and with `log` the rays cast; by the wide tracer where `kernel` names
+/// one (images only: no records, no ray log).
 fn render_tiles(
     scene: &Scene,
     opts: &RenderOptions,
     level: Option<RecordLevel>,
-    wide: bool,
+    kernel: Kernel,
     log: bool,
     progress: &(dyn Fn(u64) + Sync),
 ) -> (RenderOutput, Vec<PathRecord>, RayLog) {
@@ -314,11 +367,12 @@ fn render_tiles(
     let (w, h) = (scene.camera().width, scene.camera().height);
     let (tx, ty) = (w.div_ceil(TILE), h.div_ceil(TILE));
     #[cfg(target_arch = "x86_64")]
-    let wide = (wide && level.is_none() && !log && opts.spp > 0)
-        .then(|| wide::WideTracer::new(scene))
-        .flatten();
+    let wide = (level.is_none() && !log && opts.spp > 0)
+        .then(|| kernel.backend())
+        .flatten()
+        .map(|backend| wide::WideTracer::new(scene, backend));
     #[cfg(not(target_arch = "x86_64"))]
-    let _ = wide;
+    let _ = kernel;
     let mut tiles: Vec<TileOutput> = (0..tx * ty)
         .into_par_iter()
         .map(|t| {

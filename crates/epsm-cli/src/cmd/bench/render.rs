@@ -25,10 +25,12 @@ pub struct RenderBenchArgs {
     /// Timed repetitions per thread count (the best is reported).
     #[arg(long, default_value_t = 3)]
     pub repeats: u32,
-    /// The bounce loop: `fastest` (the wide tracer where the CPU has
-    /// AVX-512, else the scalar one) or `scalar` (one path at a time).
-    #[arg(long, value_enum, default_value_t = KernelArg::Fastest)]
-    pub kernel: KernelArg,
+    /// The bounce loops to time, comma-separated, alternating run by run:
+    /// `fastest` (the wide tracer on the widest lanes the CPU has, else the
+    /// scalar loop), `avx512`, `avx2`, `portable` (the wide tracer on those
+    /// lanes) or `scalar` (one path at a time).
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "fastest")]
+    pub kernel: Vec<KernelArg>,
     /// Print one JSON object per scene instead of text.
     #[arg(long)]
     pub json: bool,
@@ -37,21 +39,35 @@ pub struct RenderBenchArgs {
 /// `--kernel` values.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum KernelArg {
-    /// The wide tracer where the CPU has AVX-512, else the scalar one.
+    /// The widest lanes the CPU has, else the scalar loop.
     Fastest,
+    /// The wide tracer on AVX-512.
+    Avx512,
+    /// The wide tracer on AVX2.
+    Avx2,
+    /// The wide tracer on plain arrays.
+    Portable,
     /// One path at a time.
     Scalar,
 }
 
 impl KernelArg {
-    /// The tracer's kernel, and its name in the report (`wide` or `scalar`:
-    /// the one that actually runs on this CPU).
-    fn kernel(self) -> (Kernel, &'static str) {
-        match self {
-            KernelArg::Fastest if Kernel::wide_available() => (Kernel::Fastest, "wide"),
-            KernelArg::Fastest => (Kernel::Fastest, "scalar"),
-            KernelArg::Scalar => (Kernel::Scalar, "scalar"),
-        }
+    /// The tracer's kernel, resolved to the one that runs on this CPU, or
+    /// an error naming the kernel this CPU cannot run.
+    fn kernel(self) -> anyhow::Result<Kernel> {
+        let kernel = match self {
+            KernelArg::Fastest => Kernel::Fastest,
+            KernelArg::Avx512 => Kernel::Avx512,
+            KernelArg::Avx2 => Kernel::Avx2,
+            KernelArg::Portable => Kernel::Portable,
+            KernelArg::Scalar => Kernel::Scalar,
+        };
+        anyhow::ensure!(
+            kernel.available(),
+            "--kernel {}: this CPU cannot run it (it lacks the instructions)",
+            kernel.name()
+        );
+        Ok(kernel.resolve())
     }
 }
 
@@ -66,7 +82,11 @@ pub fn run(args: &RenderBenchArgs) -> anyhow::Result<()> {
     }
     anyhow::ensure!(args.repeats >= 1, "--repeats must be at least 1");
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let (kernel, kernel_name) = args.kernel.kernel();
+    let kernels = args
+        .kernel
+        .iter()
+        .map(|k| k.kernel())
+        .collect::<anyhow::Result<Vec<_>>>()?;
     for path in &args.scenes {
         let t0 = Instant::now();
         let scene = load_scene(path)?;
@@ -74,7 +94,6 @@ pub fn run(args: &RenderBenchArgs) -> anyhow::Result<()> {
         let mut opts = RenderOptions::from_scene(&scene);
         opts.spp = args.spp.unwrap_or(opts.spp);
         opts.max_depth = args.max_depth.unwrap_or(opts.max_depth);
-        let mut results = Vec::new();
         let thread_counts = [1, cores];
         // All pools live to the end: a thread exiting mid-measurement would
         // take its CPU time out of the process total.
@@ -82,46 +101,60 @@ pub fn run(args: &RenderBenchArgs) -> anyhow::Result<()> {
             .iter()
             .map(|&n| rayon::ThreadPoolBuilder::new().num_threads(n).build())
             .collect::<Result<Vec<_>, _>>()?;
-        for (&threads, pool) in thread_counts.iter().zip(&pools) {
-            let mut best: Option<(epsm_render::tracer::RenderOutput, Option<f64>)> = None;
+        // Per kernel, per thread count: the fastest run and its CPU time.
+        type Best = Option<(epsm_render::tracer::RenderOutput, Option<f64>)>;
+        let mut best: Vec<Vec<Best>> = vec![vec![None; thread_counts.len()]; kernels.len()];
+        for (t, pool) in pools.iter().enumerate() {
+            // Kernels alternate run by run, so a change of machine load
+            // affects them alike.
             for _ in 0..args.repeats.max(1) {
-                let start = cpu_seconds();
-                let out = pool.install(|| render_with(&scene, &opts, kernel, &|_| {}));
-                let cpu = cpu_seconds()
-                    .zip(start)
-                    .map(|(end, start)| end - start)
-                    .filter(|&c| c > 0.0);
-                if best.as_ref().is_none_or(|(b, _)| out.seconds < b.seconds) {
-                    best = Some((out, cpu));
+                for (k, &kernel) in kernels.iter().enumerate() {
+                    let start = cpu_seconds();
+                    let out = pool.install(|| render_with(&scene, &opts, kernel, &|_| {}));
+                    let cpu = cpu_seconds()
+                        .zip(start)
+                        .map(|(end, start)| end - start)
+                        .filter(|&c| c > 0.0);
+                    let slot = &mut best[k][t];
+                    if slot.as_ref().is_none_or(|(b, _)| out.seconds < b.seconds) {
+                        *slot = Some((out, cpu));
+                    }
                 }
-            }
-            if let Some((b, cpu)) = best {
-                let rays = (b.counters.rays + b.counters.shadow_rays) as f64;
-                results.push(serde_json::json!({
-                    "threads": threads,
-                    "seconds": b.seconds,
-                    "samples_per_s": b.samples as f64 / b.seconds,
-                    "samples_per_cpu_s": cpu.map(|c| b.samples as f64 / c),
-                    "rays_per_s": rays / b.seconds,
-                    "rays_per_sample": rays / b.samples as f64,
-                }));
             }
         }
         let cam = scene.camera();
-        let report = serde_json::json!({
-            "scene": path.display().to_string(),
-            "resolution": [cam.width, cam.height],
-            "spp": opts.spp,
-            "max_depth": opts.max_depth,
-            "kernel": kernel_name,
-            "load_and_build_s": load_s,
-            "runs": results,
-            "peak_rss_mb": crate::cmd::peak_rss_mb(),
-        });
-        if args.json {
-            println!("{report}");
-        } else {
-            println!("{}", serde_json::to_string_pretty(&report)?);
+        for (kernel, runs) in kernels.iter().zip(best) {
+            let results: Vec<_> = thread_counts
+                .iter()
+                .zip(runs)
+                .filter_map(|(&threads, run)| {
+                    let (b, cpu) = run?;
+                    let rays = (b.counters.rays + b.counters.shadow_rays) as f64;
+                    Some(serde_json::json!({
+                        "threads": threads,
+                        "seconds": b.seconds,
+                        "samples_per_s": b.samples as f64 / b.seconds,
+                        "samples_per_cpu_s": cpu.map(|c| b.samples as f64 / c),
+                        "rays_per_s": rays / b.seconds,
+                        "rays_per_sample": rays / b.samples as f64,
+                    }))
+                })
+                .collect();
+            let report = serde_json::json!({
+                "scene": path.display().to_string(),
+                "resolution": [cam.width, cam.height],
+                "spp": opts.spp,
+                "max_depth": opts.max_depth,
+                "kernel": kernel.name(),
+                "load_and_build_s": load_s,
+                "runs": results,
+                "peak_rss_mb": crate::cmd::peak_rss_mb(),
+            });
+            if args.json {
+                println!("{report}");
+            } else {
+                println!("{}", serde_json::to_string_pretty(&report)?);
+            }
         }
     }
     Ok(())

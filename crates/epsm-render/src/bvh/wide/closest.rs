@@ -14,31 +14,31 @@ use super::lanes;
 use super::rays::RayLanes;
 use super::triangles::TriangleHits;
 use crate::bvh::flat::FlatBvh;
-use crate::simd::{F32x16, Mask16, U32x16};
+use crate::simd::{F32x16, Lanes, Mask16, U32x16};
 
 /// Per lane, the closest hit found so far in a bottom-level BVH.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct Closest16 {
+pub(super) struct Closest16<B: Lanes> {
     /// Lanes with a hit.
     pub found: Mask16,
     /// The lane's `t_max`: its hit's `t` in `found`, else the ray's own.
-    pub t: F32x16,
+    pub t: F32x16<B>,
     /// Barycentric weight of `p1` (meaningful in `found`).
-    pub b1: F32x16,
+    pub b1: F32x16<B>,
     /// Barycentric weight of `p2` (meaningful in `found`).
-    pub b2: F32x16,
+    pub b2: F32x16<B>,
     /// The caller's id of the triangle hit (meaningful in `found`).
-    pub id: U32x16,
+    pub id: U32x16<B>,
     /// The half-packet of the triangle hit
     /// ([`Tree16::groups`](super::tree::Tree16::groups); `u32::MAX` before a
     /// hit).
-    pub group: U32x16,
+    pub group: U32x16<B>,
 }
 
-impl Closest16 {
+impl<B: Lanes> Closest16<B> {
     /// No hit yet, rays ending at `t_max`.
     #[inline(always)]
-    pub fn none(rays: &RayLanes) -> Self {
+    pub fn none(rays: &RayLanes<B>) -> Self {
         let zero = F32x16::splat(rays.k, 0.0);
         Self {
             found: Mask16::NONE,
@@ -51,11 +51,11 @@ impl Closest16 {
     }
 }
 
-impl Closest16 {
+impl<B: Lanes> Closest16<B> {
     /// Takes the hits `hit` in the lanes `lanes`, of the triangle with id
     /// `id` in half-packet `group` (per lane).
     #[inline(always)]
-    pub fn take(&mut self, lanes: Mask16, hit: &TriangleHits, id: U32x16, group: U32x16) {
+    pub fn take(&mut self, lanes: Mask16, hit: &TriangleHits<B>, id: U32x16<B>, group: U32x16<B>) {
         self.found = self.found | lanes;
         self.t = F32x16::select(lanes, hit.t, self.t);
         self.b1 = F32x16::select(lanes, hit.b1, self.b1);
@@ -70,14 +70,14 @@ impl Closest16 {
 /// the scalar walk.
 const NO_GROUP: u32 = u32::MAX - 1;
 
-impl Closest16 {
+impl<B: Lanes> Closest16<B> {
     /// Walks the subtree under `node` of `flat` for each lane of `lanes` by
     /// the scalar walk, each up to its current `t`, and takes its hits.
     #[inline(always)]
     pub fn walk_lanes<const ANY: bool>(
         &mut self,
         flat: &FlatBvh,
-        rays: &RayLanes,
+        rays: &RayLanes<B>,
         node: usize,
         lanes: Mask16,
         plain: &mut Option<lanes::PlainRays>,
@@ -89,7 +89,7 @@ impl Closest16 {
             return;
         };
         let mut t = self.t.to_array();
-        let hits = lanes::subtrees::<ANY>(rays.k, flat, node, lanes, plain, &t);
+        let hits = lanes::subtrees::<ANY, _>(rays.k, flat, node, lanes, plain, &t);
         if ANY {
             for (lane, hit) in hits.iter().enumerate() {
                 self.found.0 |= u16::from(hit.is_some()) << lane;

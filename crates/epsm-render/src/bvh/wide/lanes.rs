@@ -7,7 +7,7 @@
 //! scalar function the wide one stands for (`FlatBvh::trace_from`,
 //! `Accel::trace_instances`, `Accel::surface_point`), so its result is the
 //! scalar one by construction. They run compiled for
-//! the CPU level the caller's token proves ([`with_avx512`]), so the scalar
+//! the CPU level the caller's token proves ([`Lanes::run`]), so the scalar
 //! walks' AVX box and packet tests inline as in the tracer's AVX2 build.
 //!
 //! No parameters.
@@ -15,44 +15,30 @@
 use glam::{Vec2, Vec3, Vec3A};
 
 use super::super::flat::{FlatBvh, FlatHit};
-use super::super::node::{Avx, TraceRay};
+use super::super::node::{BoxTest, TraceRay};
 use super::super::{Accel, Found, NO_WORLD_INDEX};
+use super::Rays16;
 use crate::frame::Frame;
 use crate::hit::{Hit, SurfacePoint, TexCoords};
-use crate::ray::{Ray, Rays16};
+use crate::ray::Ray;
 use crate::scene::Object;
-use crate::simd::{Avx512, LANES, Mask16};
-
-/// Runs `f` compiled with the features of the AVX-512 level (`f` must be
-/// inlined: callers pass an `#[inline(always)]` closure).
-#[inline(always)]
-#[allow(unsafe_code)]
-pub(super) fn with_avx512<R>(_: Avx512, f: impl FnOnce() -> R) -> R {
-    #[target_feature(enable = "avx512f,avx512vl,avx512dq,avx512bw,avx2,bmi1,bmi2,lzcnt,popcnt")]
-    fn run<R>(f: impl FnOnce() -> R) -> R {
-        f()
-    }
-    // SAFETY: `run` requires only the features it enables, and an
-    // `Avx512` token exists only on a CPU found to have each of them.
-    unsafe { run(f) }
-}
+use crate::simd::{LANES, Lanes, Mask16};
 
 /// The scalar walk of the subtree under `node` of `flat` for each lane of
 /// `lanes`, its ray `rays.lane(i)` ending at `t_max[i]`: the lane's hit there.
 #[inline(never)]
-pub(super) fn subtrees<const ANY: bool>(
-    k: Avx512,
+pub(super) fn subtrees<const ANY: bool, B: Lanes>(
+    k: B,
     flat: &FlatBvh,
     node: usize,
     lanes: Mask16,
     rays: &PlainRays,
     t_max: &[f32; LANES],
 ) -> [Option<FlatHit>; LANES] {
-    with_avx512(
-        k,
+    k.run(
         #[inline(always)]
         || {
-            let boxes = Avx::from_avx512(k);
+            let boxes = k.boxes();
             let mut hits = [None; LANES];
             for lane in lanes.lanes() {
                 let ray = rays.lane(lane);
@@ -70,16 +56,15 @@ impl Accel {
     /// with `active`, the trace's hit from its best hit so far on; `None`
     /// for the others.
     #[inline(never)]
-    pub(super) fn instances_per_lane<const ANY: bool>(
+    pub(super) fn instances_per_lane<const ANY: bool, B: Lanes>(
         &self,
-        k: Avx512,
+        k: B,
         lanes: &[(bool, Ray, Option<Hit>); LANES],
     ) -> [Option<Hit>; LANES] {
-        with_avx512(
-            k,
+        k.run(
             #[inline(always)]
             || {
-                let boxes = Avx::from_avx512(k);
+                let boxes = k.boxes();
                 let mut hits = [None; LANES];
                 for (hit, &(active, ray, best)) in hits.iter_mut().zip(lanes) {
                     if active {
@@ -97,7 +82,7 @@ impl Accel {
         &self,
         ray: &Ray,
         best: Option<Hit>,
-        boxes: Avx,
+        boxes: impl BoxTest,
     ) -> Option<Hit> {
         let t_max = best.map_or(ray.t_max, |h| h.t);
         let (origin, dir) = (Vec3A::from(ray.origin), Vec3A::from(ray.dir));
@@ -123,14 +108,13 @@ impl Accel {
     /// [`Accel::surface_point`] of each hit (a placeholder point for
     /// `None`).
     #[inline(never)]
-    pub(super) fn points_per_lane(
+    pub(super) fn points_per_lane<B: Lanes>(
         &self,
-        k: Avx512,
+        k: B,
         objects: &[Object],
         hits: &[Option<Hit>; LANES],
     ) -> [SurfacePoint; LANES] {
-        with_avx512(
-            k,
+        k.run(
             #[inline(always)]
             || {
                 hits.map(|hit| match hit {
@@ -160,7 +144,7 @@ pub(super) struct PlainRays {
 impl PlainRays {
     /// The arrays of `rays`.
     #[inline(always)]
-    pub fn new(rays: &Rays16) -> Self {
+    pub fn new<B: Lanes>(rays: &Rays16<B>) -> Self {
         let (o, d) = (&rays.origin, &rays.dir);
         Self {
             origin: [o.x.to_array(), o.y.to_array(), o.z.to_array()],

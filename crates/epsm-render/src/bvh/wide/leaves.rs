@@ -31,7 +31,7 @@ use super::rays::RayLanes;
 use super::tree::{Node16, Table, Tree16};
 use super::triangles::{Along, hit_triangle, watertight};
 use super::walk::Policy;
-use crate::simd::{Avx512, F32x16, Mask16, U32x16};
+use crate::simd::{F32x16, Lanes, Mask16, U32x16};
 
 impl Tree16 {
     /// Tests the leaf triangles of node `n` against the lanes of `at` that
@@ -40,12 +40,12 @@ impl Tree16 {
     /// lowering `best`; with `ANY` a lane's first hit removes it from
     /// `todo`.
     #[inline(always)]
-    pub(super) fn test_leaves<const ANY: bool>(
+    pub(super) fn test_leaves<const ANY: bool, B: Lanes>(
         &self,
         n: &Node16,
         at: Mask16,
-        rays: &RayLanes,
-        best: &mut Closest16,
+        rays: &RayLanes<B>,
+        best: &mut Closest16<B>,
         todo: &mut Mask16,
         policy: Policy,
     ) {
@@ -67,22 +67,22 @@ impl Tree16 {
         if let Some(table) = self.tables.get(n.table as usize) {
             let lists = lists(rays.k, n, &entered);
             if rounds(lists) * policy.round_cost < triangles * policy.triangle_cost {
-                test_rounds::<ANY>(table, lists, rays, best, todo);
+                test_rounds::<ANY, _>(table, lists, rays, best, todo);
                 return;
             }
         }
-        self.test_triangles::<ANY>(n, &entered, rays, best, todo);
+        self.test_triangles::<ANY, _>(n, &entered, rays, best, todo);
     }
 
     /// Tests the leaf triangles of `n` one at a time, each against the
     /// lanes that enter its leaf (`entered[c]` for child `c`).
     #[inline(always)]
-    fn test_triangles<const ANY: bool>(
+    fn test_triangles<const ANY: bool, B: Lanes>(
         &self,
         n: &Node16,
         entered: &[Mask16; 8],
-        rays: &RayLanes,
-        best: &mut Closest16,
+        rays: &RayLanes<B>,
+        best: &mut Closest16<B>,
         todo: &mut Mask16,
     ) {
         let mut leaves = u32::from(n.leaves);
@@ -117,7 +117,7 @@ impl Tree16 {
 /// Per lane, the node's leaf triangles (bit `i`: triangle `base + i`) of
 /// the leaf children it enters (`entered[c]` for child `c`).
 #[inline(always)]
-fn lists(k: Avx512, node: &Node16, entered: &[Mask16; 8]) -> U32x16 {
+fn lists<B: Lanes>(k: B, node: &Node16, entered: &[Mask16; 8]) -> U32x16<B> {
     let mut lists = U32x16::splat(k, 0);
     let mut leaves = u32::from(node.leaves);
     while leaves != 0 {
@@ -131,7 +131,7 @@ fn lists(k: Avx512, node: &Node16, entered: &[Mask16; 8]) -> U32x16 {
 
 /// The longest of the lists (the rounds they take).
 #[inline(always)]
-fn rounds(lists: U32x16) -> u32 {
+fn rounds<B: Lanes>(lists: U32x16<B>) -> u32 {
     let lengths = lists.to_array().map(u32::count_ones);
     lengths.into_iter().max().unwrap_or(0)
 }
@@ -139,11 +139,11 @@ fn rounds(lists: U32x16) -> u32 {
 /// Tests each lane's triangles of `lists` (in `table`) in rounds (module
 /// docs).
 #[inline(always)]
-fn test_rounds<const ANY: bool>(
+fn test_rounds<const ANY: bool, B: Lanes>(
     table: &Table,
-    mut lists: U32x16,
-    rays: &RayLanes,
-    best: &mut Closest16,
+    mut lists: U32x16<B>,
+    rays: &RayLanes<B>,
+    best: &mut Closest16<B>,
     todo: &mut Mask16,
 ) {
     let k = rays.k;
@@ -186,7 +186,13 @@ fn test_rounds<const ANY: bool>(
 /// Per lane, vertex `v` of its triangle `local` of `table` along the lane's
 /// axes.
 #[inline(always)]
-fn along(k: Avx512, table: &Table, v: usize, local: U32x16, rays: &RayLanes) -> Along {
+fn along<B: Lanes>(
+    k: B,
+    table: &Table,
+    v: usize,
+    local: U32x16<B>,
+    rays: &RayLanes<B>,
+) -> Along<B> {
     let x = F32x16::from_array(k, table.coords[3 * v]).permute(local);
     let y = F32x16::from_array(k, table.coords[3 * v + 1]).permute(local);
     let z = F32x16::from_array(k, table.coords[3 * v + 2]).permute(local);
@@ -200,6 +206,6 @@ fn along(k: Avx512, table: &Table, v: usize, local: U32x16, rays: &RayLanes) -> 
 
 /// Lane `i` of `v` is lane `index[i]` (`< 16`) of `v`.
 #[inline(always)]
-fn permute_u(v: U32x16, index: U32x16) -> U32x16 {
+fn permute_u<B: Lanes>(v: U32x16<B>, index: U32x16<B>) -> U32x16<B> {
     F32x16::from_bits(v).permute(index).to_bits()
 }

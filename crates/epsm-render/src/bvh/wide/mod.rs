@@ -1,4 +1,4 @@
-//! Sixteen rays at a time, one per AVX-512 lane, for the wide tracer:
+//! Sixteen rays at a time, one per vector lane, for the wide tracer:
 //! closest hits ([`Accel::closest_hits16`]), occlusion
 //! ([`Accel::occluded16`]) and shading points
 //! ([`Accel::surface_points16`]), each lane what the scalar function gives
@@ -55,6 +55,7 @@ mod rays;
 mod spheres;
 mod tree;
 mod triangles;
+mod values;
 mod walk;
 
 #[cfg(test)]
@@ -65,14 +66,13 @@ use super::NO_WORLD_INDEX;
 use super::flat::FlatBvh;
 use super::shading::ShadingTriangle;
 use super::world::TriangleRef;
-use crate::hit::{Hits16, SurfacePoints16};
-use crate::ray::Rays16;
 use crate::scene::Object;
-use crate::simd::{Avx512, F32x16, Mask16, U32x16};
+use crate::simd::{F32x16, Lanes, Mask16, U32x16};
 use closest::Closest16;
 use points::ShadingTable;
 use rays::RayLanes;
 use tree::Tree16;
+pub(crate) use values::{Frames16, Hits16, Rays16, SurfacePoints16, TexCoords16};
 use walk::Policy;
 
 /// The static BVH's tables for sixteen rays at a time.
@@ -110,24 +110,29 @@ impl Accel {
     /// Lane `i` in `active`: exactly `self.closest_hit` of lane `i`'s ray
     /// (but for ties, module docs); other lanes: `found` unset.
     #[inline(always)]
-    pub(crate) fn closest_hits16(&self, k: Avx512, rays: &Rays16, active: Mask16) -> Hits16 {
+    pub(crate) fn closest_hits16<B: Lanes>(
+        &self,
+        k: B,
+        rays: &Rays16<B>,
+        active: Mask16,
+    ) -> Hits16<B> {
         self.closest_hits16_by(k, rays, active, Policy::MEASURED)
     }
 
     /// [`Accel::closest_hits16`] with the static BVH walked by `policy`.
     #[inline(always)]
-    fn closest_hits16_by(
+    fn closest_hits16_by<B: Lanes>(
         &self,
-        k: Avx512,
-        rays: &Rays16,
+        k: B,
+        rays: &Rays16<B>,
         active: Mask16,
         policy: Policy,
-    ) -> Hits16 {
+    ) -> Hits16<B> {
         let lanes = RayLanes::new(k, rays);
         let spheres = if self.listed.is_empty() {
             None
         } else {
-            Some(self.listed_hits16::<false>(&lanes, active))
+            Some(self.listed_hits16::<false, _>(&lanes, active))
         };
         let mut best = Closest16::none(&lanes);
         let (zero, none) = (U32x16::splat(k, 0), U32x16::splat(k, NO_WORLD_INDEX));
@@ -143,7 +148,7 @@ impl Accel {
         if let Some(world) = self.world.as_deref() {
             let w = &world.wide;
             w.tree
-                .walk::<false>(&world.bvh, &lanes, active, &mut best, policy);
+                .walk::<false, _>(&world.bvh, &lanes, active, &mut best, policy);
             hits = Hits16 {
                 found: best.found,
                 object: U32x16::gather(&w.objects, best.id, best.found, zero),
@@ -170,7 +175,7 @@ impl Accel {
         if !self.tlas.slots.is_empty() && active.any() {
             let (rays, best) = (lanes::PlainRays::new(rays), hits.to_lanes());
             let lanes = std::array::from_fn(|i| (active.test(i), rays.lane(i), best[i]));
-            hits = Hits16::from_lanes(k, &self.instances_per_lane::<false>(k, &lanes));
+            hits = Hits16::from_lanes(k, &self.instances_per_lane::<false, _>(k, &lanes));
         }
         hits
     }
@@ -178,17 +183,23 @@ impl Accel {
     /// Lane `i` in `active`: exactly `self.occluded` of lane `i`'s ray; other
     /// lanes unset.
     #[inline(always)]
-    pub(crate) fn occluded16(&self, k: Avx512, rays: &Rays16, active: Mask16) -> Mask16 {
+    pub(crate) fn occluded16<B: Lanes>(&self, k: B, rays: &Rays16<B>, active: Mask16) -> Mask16 {
         self.occluded16_by(k, rays, active, Policy::MEASURED)
     }
 
     /// [`Accel::occluded16`] with the static BVH walked by `policy`.
     #[inline(always)]
-    fn occluded16_by(&self, k: Avx512, rays: &Rays16, active: Mask16, policy: Policy) -> Mask16 {
+    fn occluded16_by<B: Lanes>(
+        &self,
+        k: B,
+        rays: &Rays16<B>,
+        active: Mask16,
+        policy: Policy,
+    ) -> Mask16 {
         let lanes = RayLanes::new(k, rays);
         let mut occluded = Mask16::NONE;
         if !self.listed.is_empty() {
-            occluded = self.listed_hits16::<true>(&lanes, active).found;
+            occluded = self.listed_hits16::<true, _>(&lanes, active).found;
         }
         if let Some(world) = self.world.as_deref() {
             let mut best = Closest16::none(&lanes);
@@ -196,14 +207,14 @@ impl Accel {
             world
                 .wide
                 .tree
-                .walk::<true>(&world.bvh, &lanes, left, &mut best, policy);
+                .walk::<true, _>(&world.bvh, &lanes, left, &mut best, policy);
             occluded = occluded | best.found;
         }
         let rest = active.and_not(occluded);
         if !self.tlas.slots.is_empty() && rest.any() {
             let rays = lanes::PlainRays::new(rays);
             let lanes = std::array::from_fn(|i| (rest.test(i), rays.lane(i), None));
-            let found = self.instances_per_lane::<true>(k, &lanes);
+            let found = self.instances_per_lane::<true, _>(k, &lanes);
             for (lane, hit) in found.iter().enumerate() {
                 occluded.0 |= u16::from(hit.is_some()) << lane;
             }
@@ -214,12 +225,12 @@ impl Accel {
     /// Lane `i` in `hits.found`: exactly `self.surface_point(objects,
     /// &hits.lane(i).unwrap())`; other lanes unspecified.
     #[inline(always)]
-    pub(crate) fn surface_points16(
+    pub(crate) fn surface_points16<B: Lanes>(
         &self,
-        k: Avx512,
+        k: B,
         objects: &[Object],
-        hits: &Hits16,
-    ) -> SurfacePoints16 {
+        hits: &Hits16<B>,
+    ) -> SurfacePoints16<B> {
         let mut done = Mask16::NONE;
         let mut out = points::blank(k);
         if let Some(world) = self.world.as_deref() {

@@ -20,10 +20,10 @@
 //! No parameters.
 
 use super::affine::{mat_mul, transform_point};
+use super::{Frames16, SurfacePoints16, TexCoords16};
 use crate::bvh::shading::{Normals, ShadingTriangle};
-use crate::frame::Frames16;
-use crate::hit::{Placement, SurfacePoints16, TexCoords16};
-use crate::simd::{Avx512, F32x16, F64x16, Mask16, U32x16, Vec3x16};
+use crate::hit::Placement;
+use crate::simd::{F32x16, F64x16, Lanes, Mask16, U32x16, Vec3x16};
 
 /// Floats per record of [`ShadingTable`].
 pub(super) const RECORD: usize = 32;
@@ -91,14 +91,14 @@ impl ShadingTable {
     /// The points at `(b1, b2)` on the triangles `index` (table indices,
     /// each in bounds in `lanes`); other lanes unspecified.
     #[inline(always)]
-    pub fn points(
+    pub fn points<B: Lanes>(
         &self,
-        k: Avx512,
-        index: U32x16,
+        k: B,
+        index: U32x16<B>,
         lanes: Mask16,
-        b1: F32x16,
-        b2: F32x16,
-    ) -> SurfacePoints16 {
+        b1: F32x16<B>,
+        b2: F32x16<B>,
+    ) -> SurfacePoints16<B> {
         let zero = F32x16::splat(k, 0.0);
         let record = Record {
             k,
@@ -156,33 +156,33 @@ impl ShadingTable {
 }
 
 /// The records of sixteen lanes, for gathers.
-struct Record<'a> {
-    k: Avx512,
+struct Record<'a, B: Lanes> {
+    k: B,
     records: &'a [f32],
     /// Per lane, the index of its record's first float.
-    base: U32x16,
+    base: U32x16<B>,
     /// The lanes read.
     lanes: Mask16,
 }
 
-impl Record<'_> {
+impl<B: Lanes> Record<'_, B> {
     /// Float `at` of each lane's record (0 outside `lanes`).
     #[inline(always)]
-    fn get(&self, at: u32) -> F32x16 {
+    fn get(&self, at: u32) -> F32x16<B> {
         let index = self.base + U32x16::splat(self.k, at);
         F32x16::gather(self.records, index, self.lanes, F32x16::splat(self.k, 0.0))
     }
 
     /// Floats `at..at + 3` of each lane's record.
     #[inline(always)]
-    fn vec(&self, at: u32) -> Vec3x16 {
+    fn vec(&self, at: u32) -> Vec3x16<B> {
         Vec3x16::new(self.get(at), self.get(at + 1), self.get(at + 2))
     }
 }
 
 /// Lanes whose `flags` have `flag`.
 #[inline(always)]
-fn has(k: Avx512, flags: U32x16, flag: u32) -> Mask16 {
+fn has<B: Lanes>(k: B, flags: U32x16<B>, flag: u32) -> Mask16 {
     let flag = U32x16::splat(k, flag);
     (flags & flag).eq(flag)
 }
@@ -190,7 +190,7 @@ fn has(k: Avx512, flags: U32x16, flag: u32) -> Mask16 {
 /// glam's `try_normalize` per lane: `v · (1/|v|)` where that reciprocal is
 /// finite and positive; `fallback` elsewhere (through [`Normalized`]).
 #[inline(always)]
-fn try_normalize(k: Avx512, v: Vec3x16) -> Normalized {
+fn try_normalize<B: Lanes>(k: B, v: Vec3x16<B>) -> Normalized<B> {
     let rcp = F32x16::splat(k, 1.0) / v.length();
     Normalized {
         ok: rcp.is_finite() & rcp.gt(F32x16::splat(k, 0.0)),
@@ -200,29 +200,29 @@ fn try_normalize(k: Avx512, v: Vec3x16) -> Normalized {
 
 /// A per-lane [`try_normalize`] result.
 #[derive(Clone, Copy)]
-struct Normalized {
+struct Normalized<B: Lanes> {
     /// Lanes that normalised.
     ok: Mask16,
     /// The normalised vectors (meaningful in `ok`).
-    v: Vec3x16,
+    v: Vec3x16<B>,
 }
 
-impl Normalized {
+impl<B: Lanes> Normalized<B> {
     /// The normalised vector, `fallback` in lanes that did not normalise.
     #[inline(always)]
-    fn unwrap_or(self, fallback: Vec3x16) -> Vec3x16 {
+    fn unwrap_or(self, fallback: Vec3x16<B>) -> Vec3x16<B> {
         Vec3x16::select(self.ok, self.v, fallback)
     }
 }
 
 /// `hit::sphere_point(placement, b1, b2)` per lane.
 #[inline(always)]
-pub(super) fn sphere_points(
-    k: Avx512,
+pub(super) fn sphere_points<B: Lanes>(
+    k: B,
     placement: &Placement,
-    b1: F32x16,
-    b2: F32x16,
-) -> SurfacePoints16 {
+    b1: F32x16<B>,
+    b2: F32x16<B>,
+) -> SurfacePoints16<B> {
     // `sphere::point` in `f64`: clamp, unfold the lower half, normalise.
     let one = F64x16::splat(k, 1.0);
     let (x, y) = (b1.to_f64().clamp(-one, one), b2.to_f64().clamp(-one, one));
@@ -250,7 +250,7 @@ pub(super) fn sphere_points(
 
 /// Points with every field zero (a start for [`select`]).
 #[inline(always)]
-pub(super) fn blank(k: Avx512) -> SurfacePoints16 {
+pub(super) fn blank<B: Lanes>(k: B) -> SurfacePoints16<B> {
     let zero = Vec3x16::splat(k, glam::Vec3::ZERO);
     SurfacePoints16 {
         p: zero,
@@ -269,7 +269,11 @@ pub(super) fn blank(k: Avx512) -> SurfacePoints16 {
 
 /// `a` in the lanes of `m`, `b` in the others.
 #[inline(always)]
-pub(super) fn select(m: Mask16, a: &SurfacePoints16, b: &SurfacePoints16) -> SurfacePoints16 {
+pub(super) fn select<B: Lanes>(
+    m: Mask16,
+    a: &SurfacePoints16<B>,
+    b: &SurfacePoints16<B>,
+) -> SurfacePoints16<B> {
     SurfacePoints16 {
         p: Vec3x16::select(m, a.p, b.p),
         ng: Vec3x16::select(m, a.ng, b.ng),

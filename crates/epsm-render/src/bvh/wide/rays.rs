@@ -13,41 +13,41 @@
 //! [`TraceRay`]: crate::bvh::node::TraceRay
 //! [`RayShear`]: crate::bvh::triangle::RayShear
 
+use super::Rays16;
 use super::lanes;
 use super::triangles::TestRays;
 use crate::bvh::node::TINY_DIR;
-use crate::ray::Rays16;
-use crate::simd::{Avx512, F32x16, Mask16, U32x16, Vec3x16};
+use crate::simd::{F32x16, Lanes, Mask16, U32x16, Vec3x16};
 
 /// Sixteen rays with their box-test and triangle-test constants.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct RayLanes {
+pub(super) struct RayLanes<B: Lanes> {
     /// The token the lanes were made with.
-    pub k: Avx512,
+    pub k: B,
     /// Origins.
-    pub origin: Vec3x16,
+    pub origin: Vec3x16<B>,
     /// Directions (not normalised).
-    pub dir: Vec3x16,
+    pub dir: Vec3x16<B>,
     /// Reciprocals of the directions' components, each clamped to at least
     /// `TINY_DIR` in magnitude first (the scalar `clamped_recip`).
-    pub inv_dir: Vec3x16,
+    pub inv_dir: Vec3x16<B>,
     /// Largest accepted `t` (the rays' own; walks keep their lowered one).
-    pub t_max: F32x16,
+    pub t_max: F32x16<B>,
     /// `index[v][a]`: the position of vertex `v`'s coordinate along the
     /// lane's axis `[kx, ky, kz][a]` in a triangle's corner vector
     /// (`3·v + k`).
-    pub index: [[U32x16; 3]; 3],
+    pub index: [[U32x16<B>; 3]; 3],
     /// `axis_is[a] = [k == 0, k == 1]` per lane for its axis
     /// `k = [kx, ky, kz][a]`.
     pub axis_is: [[Mask16; 2]; 3],
     /// The triangle test's constants: the origins along `[kx, ky, kz]`,
     /// `(−Sx, −Sy, Sz)` (`RayShear::kz_col`) and `t_min`.
-    pub test: TestRays,
+    pub test: TestRays<B>,
 }
 
 /// Per lane, `x`, `y` or `z` by axis `axis` (0, 1 or 2).
 #[inline(always)]
-fn along(k: Avx512, axis: U32x16, v: Vec3x16) -> F32x16 {
+fn along<B: Lanes>(k: B, axis: U32x16<B>, v: Vec3x16<B>) -> F32x16<B> {
     let y_or_z = F32x16::select(axis.eq(U32x16::splat(k, 1)), v.y, v.z);
     F32x16::select(axis.eq(U32x16::splat(k, 0)), v.x, y_or_z)
 }
@@ -55,17 +55,17 @@ fn along(k: Avx512, axis: U32x16, v: Vec3x16) -> F32x16 {
 /// `1 / d` after clamping `d` away from zero as the scalar `clamped_recip`
 /// does (with the sign of `d < 0`).
 #[inline(always)]
-fn clamped_recip(k: Avx512, d: F32x16) -> F32x16 {
+fn clamped_recip<B: Lanes>(k: B, d: F32x16<B>) -> F32x16<B> {
     let tiny = F32x16::splat(k, TINY_DIR);
     let signed = F32x16::select(d.lt(F32x16::splat(k, 0.0)), -tiny, tiny);
     F32x16::splat(k, 1.0) / F32x16::select(d.abs().ge(tiny), d, signed)
 }
 
-impl RayLanes {
+impl<B: Lanes> RayLanes<B> {
     /// The constants of `rays` (every lane; a caller masks the lanes it
     /// uses).
     #[inline(always)]
-    pub fn new(k: Avx512, rays: &Rays16) -> Self {
+    pub fn new(k: B, rays: &Rays16<B>) -> Self {
         let d = rays.dir;
         let [zero, one, two] = [
             U32x16::splat(k, 0),

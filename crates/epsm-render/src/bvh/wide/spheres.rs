@@ -26,36 +26,36 @@ use super::affine::{transform_point, transform_vector};
 use super::rays::RayLanes;
 use crate::bvh::Accel;
 use crate::hit::Placement;
-use crate::simd::{Avx512, F32x16, F64x16, Mask16, U32x16, Vec3x16};
+use crate::simd::{F32x16, F64x16, Lanes, Mask16, U32x16, Vec3x16};
 use crate::sphere::MissTest;
 
 /// A 3-vector per lane in `f64`.
-type Vec3d = [F64x16; 3];
+type Vec3d<B> = [F64x16<B>; 3];
 
 /// Per lane, the hit on the listed spheres.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct SphereHits {
+pub(super) struct SphereHits<B: Lanes> {
     /// Lanes with a hit.
     pub found: Mask16,
     /// The hit's `t` in `found` (rounded to `f32`), else the ray's `t_max`.
-    pub t: F32x16,
+    pub t: F32x16<B>,
     /// First octahedral coordinate (meaningful in `found`, without `ANY`).
-    pub b1: F32x16,
+    pub b1: F32x16<B>,
     /// Second octahedral coordinate.
-    pub b2: F32x16,
+    pub b2: F32x16<B>,
     /// The object hit (meaningful in `found`).
-    pub object: U32x16,
+    pub object: U32x16<B>,
 }
 
 impl Accel {
     /// The closest hits (with `ANY`, the first) of the rays of `lanes` on
     /// the listed spheres, each ray within `[t_min, t_max]`.
     #[inline(always)]
-    pub(super) fn listed_hits16<const ANY: bool>(
+    pub(super) fn listed_hits16<const ANY: bool, B: Lanes>(
         &self,
-        rays: &RayLanes,
+        rays: &RayLanes<B>,
         lanes: Mask16,
-    ) -> SphereHits {
+    ) -> SphereHits<B> {
         let k = rays.k;
         let zero = F32x16::splat(k, 0.0);
         let mut out = SphereHits {
@@ -75,7 +75,7 @@ impl Accel {
             if !tested.any() {
                 continue;
             }
-            let hit = in_lanes::<ANY>(k, placement, rays, tested, out.t);
+            let hit = in_lanes::<ANY, _>(k, placement, rays, tested, out.t);
             let Some(hit) = hit else {
                 continue;
             };
@@ -96,23 +96,23 @@ impl Accel {
 /// A sphere's hits: in lanes of `found`, `t` (rounded to `f32`) and the
 /// octahedral coordinates (zero with `ANY`).
 #[derive(Clone, Copy, Debug)]
-struct Hits {
+struct Hits<B: Lanes> {
     found: Mask16,
-    t: F32x16,
-    b1: F32x16,
-    b2: F32x16,
+    t: F32x16<B>,
+    b1: F32x16<B>,
+    b2: F32x16<B>,
 }
 
 /// The hits of the rays of `lanes` (each ending at `t_max`) on the sphere
 /// placed by `placement`, in `f64` lanes; `None` without any.
 #[inline(always)]
-fn in_lanes<const ANY: bool>(
-    k: Avx512,
+fn in_lanes<const ANY: bool, B: Lanes>(
+    k: B,
     placement: &Placement,
-    rays: &RayLanes,
+    rays: &RayLanes<B>,
     lanes: Mask16,
-    t_max: F32x16,
-) -> Option<Hits> {
+    t_max: F32x16<B>,
+) -> Option<Hits<B>> {
     let to_object = &placement.object_from_world;
     let o = widen(transform_point(k, to_object, rays.origin));
     let d = widen(transform_vector(k, to_object, rays.dir));
@@ -135,7 +135,7 @@ fn in_lanes<const ANY: bool>(
 
 /// [`MissTest::misses`] per lane: the lanes whose line surely misses.
 #[inline(always)]
-fn misses(test: &MissTest, rays: &RayLanes) -> Mask16 {
+fn misses<B: Lanes>(test: &MissTest, rays: &RayLanes<B>) -> Mask16 {
     let k = rays.k;
     let center = Vec3x16::splat(k, test.center.into());
     let oc = center - rays.origin;
@@ -149,13 +149,13 @@ fn misses(test: &MissTest, rays: &RayLanes) -> Mask16 {
 
 /// The lanes of `v` widened to `f64`.
 #[inline(always)]
-fn widen(v: Vec3x16) -> Vec3d {
+fn widen<B: Lanes>(v: Vec3x16<B>) -> Vec3d<B> {
     [v.x.to_f64(), v.y.to_f64(), v.z.to_f64()]
 }
 
 /// `(x·x' + y·y') + z·z'` per lane (glam's `DVec3::dot`).
 #[inline(always)]
-fn dot(p: &Vec3d, q: &Vec3d) -> F64x16 {
+fn dot<B: Lanes>(p: &Vec3d<B>, q: &Vec3d<B>) -> F64x16<B> {
     p[0] * q[0] + p[1] * q[1] + p[2] * q[2]
 }
 
@@ -163,17 +163,17 @@ fn dot(p: &Vec3d, q: &Vec3d) -> F64x16 {
 /// lanes with a root in `[t_min, t_max]` and that root; `None` when no lane
 /// has one.
 #[inline(always)]
-fn intersect(
-    k: Avx512,
-    o: Vec3d,
-    d: Vec3d,
-    t_min: F64x16,
-    t_max: F64x16,
+fn intersect<B: Lanes>(
+    k: B,
+    o: Vec3d<B>,
+    d: Vec3d<B>,
+    t_min: F64x16<B>,
+    t_max: F64x16<B>,
     lanes: Mask16,
-) -> Option<(Mask16, F64x16)> {
+) -> Option<(Mask16, F64x16<B>)> {
     let a = dot(&d, &d);
     let h = -dot(&o, &d);
-    let m: Vec3d = [
+    let m: Vec3d<B> = [
         o[0] * a + d[0] * h,
         o[1] * a + d[1] * h,
         o[2] * a + d[2] * h,
@@ -201,7 +201,7 @@ fn intersect(
 /// [`sphere::local_coords`](crate::sphere::local_coords) per lane: the
 /// octahedral coordinates of the direction of `p`.
 #[inline(always)]
-fn local_coords(k: Avx512, p: Vec3d) -> [F64x16; 2] {
+fn local_coords<B: Lanes>(k: B, p: Vec3d<B>) -> [F64x16<B>; 2] {
     let one = F64x16::splat(k, 1.0);
     let s = p[0].abs() + p[1].abs() + p[2].abs();
     let q = [p[0] / s, p[1] / s, p[2] / s];

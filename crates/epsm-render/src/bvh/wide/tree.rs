@@ -25,7 +25,7 @@ use super::rays::RayLanes;
 use crate::bvh::flat::FlatBvh;
 use crate::bvh::node::EXIT_SCALE;
 use crate::bvh::packet::LANES;
-use crate::simd::{Avx512, F32x16, Mask16};
+use crate::simd::{F32x16, Lanes, Mask16};
 
 /// One node's children.
 #[derive(Clone, Copy, Debug)]
@@ -93,11 +93,11 @@ pub(super) struct Tree16 {
 
 /// Sixteen rays against one box.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct Entered {
+pub(super) struct Entered<B: Lanes> {
     /// Lanes that enter the box within their `t` range.
     pub lanes: Mask16,
     /// Per lane, the entry distance (meaningful in `lanes`).
-    pub entry: F32x16,
+    pub entry: F32x16<B>,
 }
 
 impl Tree16 {
@@ -181,7 +181,12 @@ impl Node16 {
     /// The lanes of `rays` (with `t` up to `t_max`) that enter child
     /// `child`'s box, and their entry distances.
     #[inline(always)]
-    pub fn enter(&self, child: usize, rays: &RayLanes, t_max: F32x16) -> Entered {
+    pub fn enter<B: Lanes>(
+        &self,
+        child: usize,
+        rays: &RayLanes<B>,
+        t_max: F32x16<B>,
+    ) -> Entered<B> {
         let k = rays.k;
         let child = child & 7;
         let [x, y, z] = &self.planes;
@@ -201,7 +206,7 @@ impl Node16 {
 /// of rays from `o` with reciprocal direction `inv`: the smaller and the
 /// larger of `(lo − o)·inv` and `(hi − o)·inv`.
 #[inline(always)]
-fn slab(k: Avx512, lo: f32, hi: f32, o: F32x16, inv: F32x16) -> (F32x16, F32x16) {
+fn slab<B: Lanes>(k: B, lo: f32, hi: f32, o: F32x16<B>, inv: F32x16<B>) -> (F32x16<B>, F32x16<B>) {
     let lo = (F32x16::splat(k, lo) - o) * inv;
     let hi = (F32x16::splat(k, hi) - o) * inv;
     (lo.min(hi), lo.max(hi))

@@ -22,49 +22,49 @@
 
 use super::rays::RayLanes;
 use super::tree::Corners;
-use crate::simd::{Avx512, F32x16, Mask16, U32x16};
+use crate::simd::{F32x16, Lanes, Mask16, U32x16};
 
 /// The lanes that hit a triangle, with their `t` and barycentrics.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct TriangleHits {
+pub(super) struct TriangleHits<B: Lanes> {
     /// Lanes with a hit in their `t` range.
     pub lanes: Mask16,
     /// Ray parameter (meaningful in `lanes`).
-    pub t: F32x16,
+    pub t: F32x16<B>,
     /// Barycentric weight of `p1`.
-    pub b1: F32x16,
+    pub b1: F32x16<B>,
     /// Barycentric weight of `p2`.
-    pub b2: F32x16,
+    pub b2: F32x16<B>,
 }
 
 /// Per lane, the ray constants of the test (a packet's rays, or the rays
 /// of a chunk of (ray, triangle) pairs).
 #[derive(Clone, Copy, Debug)]
-pub(super) struct TestRays {
+pub(super) struct TestRays<B: Lanes> {
     /// The origins' coordinates along `[kx, ky, kz]`.
-    pub origin_k: [F32x16; 3],
+    pub origin_k: [F32x16<B>; 3],
     /// `(−Sx, −Sy, Sz)`.
-    pub kz_col: [F32x16; 3],
+    pub kz_col: [F32x16<B>; 3],
     /// Smallest accepted `t`.
-    pub t_min: F32x16,
+    pub t_min: F32x16<B>,
 }
 
 /// A vertex's coordinates along each lane's `[kx, ky, kz]`.
-pub(super) type Along = [F32x16; 3];
+pub(super) type Along<B> = [F32x16<B>; 3];
 
 /// A vertex relative to each lane's origin, sheared: `[x, y]` across the
 /// ray, `z` along it.
-type Sheared = [F32x16; 3];
+type Sheared<B> = [F32x16<B>; 3];
 
 /// The hits of the rays of `lanes` on the triangle `corners`, `t` in
 /// `[rays.t_min, t_max]` per lane.
 #[inline(always)]
-pub(super) fn hit_triangle(
+pub(super) fn hit_triangle<B: Lanes>(
     corners: &Corners,
-    rays: &RayLanes,
-    t_max: F32x16,
+    rays: &RayLanes<B>,
+    t_max: F32x16<B>,
     lanes: Mask16,
-) -> TriangleHits {
+) -> TriangleHits<B> {
     let p = F32x16::from_array(rays.k, corners.0);
     let [ia, ib, ic] = &rays.index;
     let vertices = [along(p, ia), along(p, ib), along(p, ic)];
@@ -73,7 +73,7 @@ pub(super) fn hit_triangle(
 
 /// The coordinates at positions `index` of the corner vector `p`.
 #[inline(always)]
-fn along(p: F32x16, index: &[U32x16; 3]) -> Along {
+fn along<B: Lanes>(p: F32x16<B>, index: &[U32x16<B>; 3]) -> Along<B> {
     [
         p.permute(index[0]),
         p.permute(index[1]),
@@ -85,13 +85,13 @@ fn along(p: F32x16, index: &[U32x16; 3]) -> Along {
 /// along the lane's axes) against the rays `rays` of `lanes`, `t` in
 /// `[rays.t_min, t_max]`.
 #[inline(always)]
-pub(super) fn watertight(
-    k: Avx512,
-    rays: &TestRays,
-    [a, b, c]: [Along; 3],
-    t_max: F32x16,
+pub(super) fn watertight<B: Lanes>(
+    k: B,
+    rays: &TestRays<B>,
+    [a, b, c]: [Along<B>; 3],
+    t_max: F32x16<B>,
     lanes: Mask16,
-) -> TriangleHits {
+) -> TriangleHits<B> {
     let zero = F32x16::splat(k, 0.0);
     let (a, b, c) = (shear(a, rays), shear(b, rays), shear(c, rays));
     let (mut u, mut v, mut w) = (edge(&c, &b), edge(&a, &c), edge(&b, &a));
@@ -137,7 +137,7 @@ pub(super) fn watertight(
 /// sheared: `(p[kx] − o[kx]) + (−Sx)·(p[kz] − o[kz])`, …,
 /// `Sz·(p[kz] − o[kz])`.
 #[inline(always)]
-fn shear(p: Along, rays: &TestRays) -> Sheared {
+fn shear<B: Lanes>(p: Along<B>, rays: &TestRays<B>) -> Sheared<B> {
     let [ox, oy, oz] = rays.origin_k;
     let [nsx, nsy, sz] = rays.kz_col;
     let z = p[2] - oz;
@@ -146,19 +146,19 @@ fn shear(p: Along, rays: &TestRays) -> Sheared {
 
 /// The edge function `p.x·q.y − p.y·q.x`.
 #[inline(always)]
-fn edge(p: &Sheared, q: &Sheared) -> F32x16 {
+fn edge<B: Lanes>(p: &Sheared<B>, q: &Sheared<B>) -> F32x16<B> {
     p[0] * q[1] - p[1] * q[0]
 }
 
 /// [`edge`] in `f64`, rounded to `f32`.
 #[inline(always)]
-fn edge_f64(p: &Sheared, q: &Sheared) -> F32x16 {
+fn edge_f64<B: Lanes>(p: &Sheared<B>, q: &Sheared<B>) -> F32x16<B> {
     (p[0].to_f64() * q[1].to_f64() - p[1].to_f64() * q[0].to_f64()).to_f32()
 }
 
 /// `x` with its sign bit flipped where `sign` has it set.
 #[inline(always)]
-fn flip(x: F32x16, sign: U32x16) -> F32x16 {
+fn flip<B: Lanes>(x: F32x16<B>, sign: U32x16<B>) -> F32x16<B> {
     F32x16::from_bits(x.to_bits() ^ sign)
 }
 
@@ -167,7 +167,11 @@ fn flip(x: F32x16, sign: U32x16) -> F32x16 {
 /// test's fallback for an edge function that rounds to zero (rare: rays
 /// through an edge or vertex).
 #[inline(always)]
-fn edges_f64(lanes: Mask16, [a, b, c]: [Sheared; 3], [u, v, w]: [F32x16; 3]) -> [F32x16; 3] {
+fn edges_f64<B: Lanes>(
+    lanes: Mask16,
+    [a, b, c]: [Sheared<B>; 3],
+    [u, v, w]: [F32x16<B>; 3],
+) -> [F32x16<B>; 3] {
     [
         F32x16::select(lanes, edge_f64(&c, &b), u),
         F32x16::select(lanes, edge_f64(&a, &c), v),

@@ -40,7 +40,7 @@ use super::closest::Closest16;
 use super::rays::RayLanes;
 use super::tree::Tree16;
 use crate::bvh::flat::FlatBvh;
-use crate::simd::{F32x16, Mask16};
+use crate::simd::{F32x16, Lanes, Mask16};
 
 /// Capacity of the traversal stack, in nodes.
 const STACK: usize = 128;
@@ -123,12 +123,12 @@ impl Tree16 {
     /// stops each lane at its first hit.
     #[inline(always)]
     #[allow(unsafe_code)]
-    pub fn walk<const ANY: bool>(
+    pub fn walk<const ANY: bool, B: Lanes>(
         &self,
         flat: &FlatBvh,
-        rays: &RayLanes,
+        rays: &RayLanes<B>,
         lanes: Mask16,
-        best: &mut Closest16,
+        best: &mut Closest16<B>,
         policy: Policy,
     ) {
         if self.nodes.is_empty() || !lanes.any() {
@@ -142,7 +142,7 @@ impl Tree16 {
             return;
         }
         let mut pending = [MaybeUninit::<Pending>::uninit(); STACK];
-        let mut entries = [MaybeUninit::<F32x16>::uninit(); STACK];
+        let mut entries = [MaybeUninit::<F32x16<B>>::uninit(); STACK];
         let mut depth = 0usize;
         // Lanes still walking (with `ANY`, those without a hit yet).
         let mut todo = lanes;
@@ -151,7 +151,7 @@ impl Tree16 {
             let n = &self.nodes[node];
             let t_node = best.t;
             // Leaf children: box tests, then their triangles.
-            self.test_leaves::<ANY>(n, at, rays, best, &mut todo, policy);
+            self.test_leaves::<ANY, _>(n, at, rays, best, &mut todo, policy);
             if ANY && !todo.any() {
                 return;
             }

@@ -13,7 +13,7 @@ use glam::Vec3;
 use super::super::LightTable;
 use super::LightSamples16;
 use super::discrete::DiscreteSamples16;
-use crate::simd::{Avx512, F32x16, F64x16, Mask16, U32x16, Vec3x16};
+use crate::simd::{F32x16, F64x16, Lanes, Mask16, U32x16, Vec3x16};
 
 /// `f32`s per triangle in [`Tables::triangles`]: `p0`, `e1`, `e2`, normal.
 const RECORD: u32 = 12;
@@ -70,9 +70,9 @@ impl Tables {
 
     /// The vector at offset `at` of the records `record` (indices of their
     /// first `f32`) in the lanes of `m`, zero in the others. (No closure:
-    /// one would be compiled without the caller's AVX-512 features.)
+    /// one would be compiled without the caller's CPU features.)
     #[inline(always)]
-    fn vector(&self, k: Avx512, record: U32x16, at: u32, m: Mask16) -> Vec3x16 {
+    fn vector<B: Lanes>(&self, k: B, record: U32x16<B>, at: u32, m: Mask16) -> Vec3x16<B> {
         let (zero, x) = (F32x16::splat(k, 0.0), record + U32x16::splat(k, at));
         let (y, z) = (x + U32x16::splat(k, 1), x + U32x16::splat(k, 2));
         Vec3x16::new(
@@ -88,14 +88,14 @@ impl LightTable {
     /// `pick` (the light selection) sent to an area emitter: lane `i` found
     /// and equal to the scalar sample exactly where that is `Some`.
     #[inline(always)]
-    pub(super) fn sample_area16(
+    pub(super) fn sample_area16<B: Lanes>(
         &self,
-        k: Avx512,
-        pick: &DiscreteSamples16,
-        p: Vec3x16,
-        u: [F32x16; 2],
+        k: B,
+        pick: &DiscreteSamples16<B>,
+        p: Vec3x16<B>,
+        u: [F32x16<B>; 2],
         lanes: Mask16,
-    ) -> LightSamples16 {
+    ) -> LightSamples16<B> {
         // Per emitter among the lanes: its triangle choice and constants.
         let emitters = pick.index.to_array();
         let mut todo = lanes;
@@ -152,16 +152,16 @@ impl LightTable {
     /// of `simd`).
     #[inline(always)]
     #[allow(clippy::too_many_arguments)] // the scalar function's five inputs, the token, the lanes
-    pub(crate) fn pdf_area16(
+    pub(crate) fn pdf_area16<B: Lanes>(
         &self,
-        k: Avx512,
-        object: U32x16,
-        triangle: U32x16,
-        p: Vec3x16,
-        y: Vec3x16,
-        n: Vec3x16,
+        k: B,
+        object: U32x16<B>,
+        triangle: U32x16<B>,
+        p: Vec3x16<B>,
+        y: Vec3x16<B>,
+        n: Vec3x16<B>,
         active: Mask16,
-    ) -> F32x16 {
+    ) -> F32x16<B> {
         let tables = &self.wide;
         let zero = F32x16::splat(k, 0.0);
         let objects = U32x16::splat(k, tables.emitter_of_object.len() as u32);
@@ -193,7 +193,12 @@ impl LightTable {
 /// Lane by lane `area::solid_angle_pdf`: `pdf_area · r² · r / |n · d|`
 /// with `r² = d · d`, zero where that is not below +∞.
 #[inline(always)]
-fn solid_angle_pdf16(k: Avx512, pdf_area: F32x16, d: Vec3x16, n: Vec3x16) -> F32x16 {
+fn solid_angle_pdf16<B: Lanes>(
+    k: B,
+    pdf_area: F32x16<B>,
+    d: Vec3x16<B>,
+    n: Vec3x16<B>,
+) -> F32x16<B> {
     let dist2 = d.length_squared();
     let pdf = pdf_area * dist2 * dist2.sqrt() / n.dot(d).abs();
     let finite = pdf.lt(F32x16::splat(k, f32::INFINITY));
@@ -202,6 +207,6 @@ fn solid_angle_pdf16(k: Avx512, pdf_area: F32x16, d: Vec3x16, n: Vec3x16) -> F32
 
 /// Lane by lane `area::in_front`: `n · d < 0`.
 #[inline(always)]
-fn in_front16(k: Avx512, d: Vec3x16, n: Vec3x16) -> Mask16 {
+fn in_front16<B: Lanes>(k: B, d: Vec3x16<B>, n: Vec3x16<B>) -> Mask16 {
     n.dot(d).lt(F32x16::splat(k, 0.0))
 }

@@ -13,14 +13,14 @@ use glam::Vec3;
 
 use super::super::{Background, LightTable};
 use super::LightSamples16;
-use crate::simd::{Avx512, F32x16, F64x16, LANES, Mask16, Vec3x16};
+use crate::simd::{F32x16, F64x16, LANES, Lanes, Mask16, Vec3x16};
 
 impl Background {
     /// Sixteen [`Self::eval`]s: lane `i` in `active` is
     /// `self.eval(dir.lane(i))` bit for bit (other lanes unspecified).
     /// Always inlined (module docs of `simd`).
     #[inline(always)]
-    pub(crate) fn eval16(&self, k: Avx512, dir: Vec3x16, active: Mask16) -> Vec3x16 {
+    pub(crate) fn eval16<B: Lanes>(&self, k: B, dir: Vec3x16<B>, active: Mask16) -> Vec3x16<B> {
         match self {
             Background::Constant(c) => Vec3x16::splat(k, *c),
             Background::EnvMap(_) => {
@@ -45,7 +45,12 @@ impl LightTable {
     /// `self.pdf_background(dir.lane(i))` bit for bit (other lanes
     /// unspecified). Always inlined (module docs of `simd`).
     #[inline(always)]
-    pub(crate) fn pdf_background16(&self, k: Avx512, dir: Vec3x16, active: Mask16) -> F32x16 {
+    pub(crate) fn pdf_background16<B: Lanes>(
+        &self,
+        k: B,
+        dir: Vec3x16<B>,
+        active: Mask16,
+    ) -> F32x16<B> {
         match &self.background {
             // The same value in every direction.
             Background::Constant(_) => F32x16::splat(k, self.pdf_background(Vec3::Z)),
@@ -71,13 +76,13 @@ impl LightTable {
 /// probability `pmf`): [`Background::sample`]'s uniform direction on the
 /// sphere. Every lane of `lanes` is found; the others are not.
 #[inline(always)]
-pub(super) fn sample_constant16(
-    k: Avx512,
+pub(super) fn sample_constant16<B: Lanes>(
+    k: B,
     radiance: Vec3,
-    pmf: F64x16,
-    u: [F32x16; 2],
+    pmf: F64x16<B>,
+    u: [F32x16<B>; 2],
     lanes: Mask16,
-) -> LightSamples16 {
+) -> LightSamples16<B> {
     let one = F32x16::splat(k, 1.0);
     let z = one - F32x16::splat(k, 2.0) * u[0];
     let r = (one - z * z).max(F32x16::splat(k, 0.0)).sqrt();

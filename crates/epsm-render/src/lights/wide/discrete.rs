@@ -11,29 +11,29 @@
 //! searched per lane by the scalar function.
 
 use super::super::distribution::{DiscreteSample, Distribution1D};
-use crate::simd::{Avx512, F64x16, LANES, Mask16, U32x16};
+use crate::simd::{F64x16, LANES, Lanes, Mask16, U32x16};
 
 /// Sixteen [`DiscreteSample`]s, by field.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct DiscreteSamples16 {
+pub(super) struct DiscreteSamples16<B: Lanes> {
     /// Chosen entry.
-    pub index: U32x16,
+    pub index: U32x16<B>,
     /// Probability of the entry.
-    pub pmf: F64x16,
+    pub pmf: F64x16<B>,
     /// The uniform number remapped into `[0, 1)` inside the entry.
-    pub u_remapped: F64x16,
+    pub u_remapped: F64x16<B>,
 }
 
 impl Distribution1D {
     /// Lane `i` in `active`: `self.sample_discrete(u[i])`, bit for bit
     /// (other lanes unspecified). Always inlined (module docs of `simd`).
     #[inline(always)]
-    pub(super) fn sample_discrete16(
+    pub(super) fn sample_discrete16<B: Lanes>(
         &self,
-        k: Avx512,
-        u: F64x16,
+        k: B,
+        u: F64x16<B>,
         active: Mask16,
-    ) -> DiscreteSamples16 {
+    ) -> DiscreteSamples16<B> {
         let below_one = F64x16::splat(k, 1.0 - f64::EPSILON);
         let clamped = u.clamp(F64x16::splat(k, 0.0), F64x16::splat(k, 1.0));
         if let Some(index) = self.single() {

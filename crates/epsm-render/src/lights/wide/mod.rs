@@ -34,36 +34,36 @@ pub(super) use area::Tables;
 use glam::{Vec2, Vec3};
 
 use super::{Background, LightSample, LightTable};
-use crate::simd::{Avx512, F32x16, LANES, Mask16, U32x16, Vec3x16};
+use crate::simd::{F32x16, LANES, Lanes, Mask16, U32x16, Vec3x16};
 
 /// Sixteen light samples: [`LightSample`]'s fields by lane, without
 /// `source`. Lanes outside `found` hold no sample (their other fields are
 /// unspecified).
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct LightSamples16 {
+pub(crate) struct LightSamples16<B: Lanes> {
     /// Lanes for which the scalar `sample` returns `Some`.
     pub found: Mask16,
     /// Unit direction from the reference point toward the light.
-    pub wo: Vec3x16,
+    pub wo: Vec3x16<B>,
     /// Distance to the light point (`f32::INFINITY` for the background).
-    pub dist: F32x16,
+    pub dist: F32x16<B>,
     /// Light position, world space (the direction `wo` for the background).
-    pub position: Vec3x16,
+    pub position: Vec3x16<B>,
     /// Unit light-surface normal (zero for point lights and the background).
-    pub normal: Vec3x16,
+    pub normal: Vec3x16<B>,
     /// Arriving radiance (`I / d²` for point lights).
-    pub radiance: Vec3x16,
+    pub radiance: Vec3x16<B>,
     /// Solid-angle pdf including the light selection (the selection
     /// probability alone for point lights).
-    pub pdf: F32x16,
+    pub pdf: F32x16<B>,
     /// Lanes whose light is a delta light (point lights).
     pub delta: Mask16,
 }
 
-impl LightSamples16 {
+impl<B: Lanes> LightSamples16<B> {
     /// No sample in any lane (every field zero).
     #[inline(always)]
-    fn none(k: Avx512) -> Self {
+    fn none(k: B) -> Self {
         let zero = Vec3x16::splat(k, Vec3::ZERO);
         Self {
             found: Mask16::NONE,
@@ -79,9 +79,9 @@ impl LightSamples16 {
 
     /// The samples of `samples` by lane (`None`: not found, and zeros).
     /// (The closures only gather scalars: one that made lane values would be
-    /// compiled without the caller's AVX-512 features.)
+    /// compiled without the caller's CPU features.)
     #[inline(always)]
-    fn from_lanes(k: Avx512, samples: &[Option<LightSample>; LANES]) -> Self {
+    fn from_lanes(k: B, samples: &[Option<LightSample>; LANES]) -> Self {
         let vector =
             |f: fn(&LightSample) -> Vec3| samples.map(|s| s.as_ref().map_or(Vec3::ZERO, f));
         let float = |f: fn(&LightSample) -> f32| samples.map(|s| s.as_ref().map_or(0.0, f));
@@ -126,14 +126,14 @@ impl LightTable {
     /// Lanes outside `active` are not found. Always inlined (module docs of
     /// `simd`).
     #[inline(always)]
-    pub(crate) fn sample16(
+    pub(crate) fn sample16<B: Lanes>(
         &self,
-        k: Avx512,
-        p: Vec3x16,
-        u_select: F32x16,
-        u: [F32x16; 2],
+        k: B,
+        p: Vec3x16<B>,
+        u_select: F32x16<B>,
+        u: [F32x16<B>; 2],
         active: Mask16,
-    ) -> LightSamples16 {
+    ) -> LightSamples16<B> {
         let Some(selection) = &self.selection else {
             return LightSamples16::none(k);
         };

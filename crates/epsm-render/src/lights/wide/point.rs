@@ -8,7 +8,7 @@
 use super::super::LightTable;
 use super::LightSamples16;
 use super::discrete::DiscreteSamples16;
-use crate::simd::{Avx512, F32x16, F64x16, Mask16, U32x16, Vec3x16};
+use crate::simd::{F32x16, F64x16, Lanes, Mask16, U32x16, Vec3x16};
 
 impl LightTable {
     /// The samples of the lanes of `lanes`, each of which selected a point
@@ -16,13 +16,13 @@ impl LightTable {
     /// reference points `p`. A lane is found unless `p` is at its light or
     /// `d²` is not finite.
     #[inline(always)]
-    pub(super) fn sample_points16(
+    pub(super) fn sample_points16<B: Lanes>(
         &self,
-        k: Avx512,
-        pick: &DiscreteSamples16,
-        p: Vec3x16,
+        k: B,
+        pick: &DiscreteSamples16<B>,
+        p: Vec3x16<B>,
         lanes: Mask16,
-    ) -> LightSamples16 {
+    ) -> LightSamples16<B> {
         let zero = F32x16::splat(k, 0.0);
         let p64 = [p.x.to_f64(), p.y.to_f64(), p.z.to_f64()];
         let mut out = LightSamples16::none(k);
@@ -63,6 +63,6 @@ impl LightTable {
 
 /// `(c − p) as f32` per lane: one component of `position − p`.
 #[inline(always)]
-fn offset(k: Avx512, c: f64, p: F64x16) -> F32x16 {
+fn offset<B: Lanes>(k: B, c: f64, p: F64x16<B>) -> F32x16<B> {
     (F64x16::splat(k, c) - p).to_f32()
 }

@@ -179,12 +179,12 @@ impl Case {
     }
 
     /// The material indices as lanes.
-    pub(super) fn material(&self, k: Avx512) -> U32x16 {
+    pub(super) fn material<B: Lanes>(&self, k: B) -> U32x16<B> {
         U32x16::from_array(k, self.material)
     }
 
     /// The texture coordinates as lanes.
-    pub(super) fn uv(&self, k: Avx512) -> TexCoords16 {
+    pub(super) fn uv<B: Lanes>(&self, k: B) -> TexCoords16<B> {
         let mut sphere = Mask16::NONE;
         let a = std::array::from_fn(|lane| match self.uv[lane] {
             TexCoords::Uv(uv) => uv.extend(0.0),

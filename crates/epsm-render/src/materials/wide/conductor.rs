@@ -3,17 +3,17 @@
 //! weight `tint` and probability 1.
 
 use super::{BsdfSamples16, Materials16};
-use crate::simd::{Avx512, F32x16, Mask16, U32x16, Vec3x16};
+use crate::simd::{F32x16, Lanes, Mask16, U32x16, Vec3x16};
 
 /// `Conductor::sample` in the `lanes` (all found), `wi` local.
 #[inline(always)]
-pub(super) fn sample(
+pub(super) fn sample<B: Lanes>(
     t: &Materials16,
-    k: Avx512,
-    material: U32x16,
-    wi: Vec3x16,
+    k: B,
+    material: U32x16<B>,
+    wi: Vec3x16<B>,
     lanes: Mask16,
-) -> BsdfSamples16 {
+) -> BsdfSamples16<B> {
     BsdfSamples16 {
         found: lanes,
         wo: Vec3x16::new(-wi.x, -wi.y, wi.z),

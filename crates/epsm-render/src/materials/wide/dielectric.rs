@@ -9,18 +9,18 @@ use super::{BsdfSamples16, Materials16};
 #[cfg(doc)]
 use crate::materials::fresnel::{self, fresnel_dielectric};
 use crate::materials::fresnel::{Amplitudes, sin2_transmitted};
-use crate::simd::{Avx512, F32x16, Mask16, U32x16, Vec3x16};
+use crate::simd::{F32x16, Lanes, Mask16, U32x16, Vec3x16};
 
 /// `Dielectric::sample` in the `lanes` (all found), `wi` local.
 #[inline(always)]
-pub(super) fn sample(
+pub(super) fn sample<B: Lanes>(
     t: &Materials16,
-    k: Avx512,
-    material: U32x16,
-    wi: Vec3x16,
-    u_lobe: F32x16,
+    k: B,
+    material: U32x16<B>,
+    wi: Vec3x16<B>,
+    u_lobe: F32x16<B>,
     lanes: Mask16,
-) -> BsdfSamples16 {
+) -> BsdfSamples16<B> {
     let (zero, one) = (F32x16::splat(k, 0.0), F32x16::splat(k, 1.0));
     let ior = Materials16::param(&t.ior, k, material, lanes);
     // η(transmitted side) / η(wi side), and the normal on the side of wi.
@@ -55,7 +55,7 @@ pub(super) fn sample(
 
 /// [`fresnel_dielectric`]`::<f32>(cos_i, eta)` in every lane.
 #[inline(always)]
-fn fresnel(k: Avx512, cos_i: F32x16, eta: F32x16) -> F32x16 {
+fn fresnel<B: Lanes>(k: B, cos_i: F32x16<B>, eta: F32x16<B>) -> F32x16<B> {
     let (zero, one) = (F32x16::splat(k, 0.0), F32x16::splat(k, 1.0));
     let cos_i = cos_i.clamp(zero, one);
     let sin2_t = sin2_transmitted(k, cos_i, eta);
@@ -68,7 +68,7 @@ fn fresnel(k: Avx512, cos_i: F32x16, eta: F32x16) -> F32x16 {
 /// [`refract`](fresnel::refract) in every lane: the transmitted direction, and the lanes
 /// where it exists (not total internal reflection).
 #[inline(always)]
-fn refract(k: Avx512, wi: Vec3x16, n: Vec3x16, eta: F32x16) -> (Vec3x16, Mask16) {
+fn refract<B: Lanes>(k: B, wi: Vec3x16<B>, n: Vec3x16<B>, eta: F32x16<B>) -> (Vec3x16<B>, Mask16) {
     let (zero, one) = (F32x16::splat(k, 0.0), F32x16::splat(k, 1.0));
     let cos_i = wi.dot(n);
     let sin2_i = (one - cos_i * cos_i).max(zero);

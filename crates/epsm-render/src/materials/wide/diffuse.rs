@@ -10,21 +10,21 @@
 use std::f32::consts::{FRAC_1_PI, FRAC_PI_4};
 
 use super::{BsdfSamples16, Materials16};
-use crate::hit::TexCoords16;
+use crate::bvh::TexCoords16;
 use crate::materials::diffuse::sin_cos_quarter;
-use crate::simd::{Avx512, F32x16, Mask16, U32x16, Vec3x16};
+use crate::simd::{F32x16, Lanes, Mask16, U32x16, Vec3x16};
 
 /// `Diffuse::sample` in the `lanes` (`found` a subset of them).
 #[inline(always)]
-pub(super) fn sample(
+pub(super) fn sample<B: Lanes>(
     t: &Materials16,
-    k: Avx512,
-    material: U32x16,
-    uv: &TexCoords16,
-    u: [F32x16; 2],
+    k: B,
+    material: U32x16<B>,
+    uv: &TexCoords16<B>,
+    u: [F32x16<B>; 2],
     lanes: Mask16,
     image: Mask16,
-) -> BsdfSamples16 {
+) -> BsdfSamples16<B> {
     let wo = cosine_hemisphere16(k, u);
     let pdf = wo.z * F32x16::splat(k, FRAC_1_PI);
     let found = lanes.and_not(pdf.le(F32x16::splat(k, 0.0)));
@@ -39,15 +39,15 @@ pub(super) fn sample(
 
 /// `Diffuse::eval` in the `lanes` (where `wi.z > 0`), `wo` local.
 #[inline(always)]
-pub(super) fn eval(
+pub(super) fn eval<B: Lanes>(
     t: &Materials16,
-    k: Avx512,
-    material: U32x16,
-    wo: Vec3x16,
-    uv: &TexCoords16,
+    k: B,
+    material: U32x16<B>,
+    wo: Vec3x16<B>,
+    uv: &TexCoords16<B>,
     lanes: Mask16,
     image: Mask16,
-) -> Vec3x16 {
+) -> Vec3x16<B> {
     let zero = F32x16::splat(k, 0.0);
     let above = lanes.and_not(wo.z.le(zero));
     let f = albedo(t, k, material, uv, above, image) * (F32x16::splat(k, FRAC_1_PI) * wo.z);
@@ -56,7 +56,7 @@ pub(super) fn eval(
 
 /// `Diffuse::pdf` in every lane where `wi.z > 0`, `wo` local.
 #[inline(always)]
-pub(super) fn pdf(k: Avx512, wo: Vec3x16) -> F32x16 {
+pub(super) fn pdf<B: Lanes>(k: B, wo: Vec3x16<B>) -> F32x16<B> {
     let zero = F32x16::splat(k, 0.0);
     F32x16::select(wo.z.le(zero), zero, F32x16::splat(k, FRAC_1_PI) * wo.z)
 }
@@ -64,14 +64,14 @@ pub(super) fn pdf(k: Avx512, wo: Vec3x16) -> F32x16 {
 /// The albedo of the materials of the `lanes` at `uv` (0 elsewhere): gathered
 /// constants, and the scalar texture lookup in the `lanes` of `image`.
 #[inline(always)]
-fn albedo(
+fn albedo<B: Lanes>(
     t: &Materials16,
-    k: Avx512,
-    material: U32x16,
-    uv: &TexCoords16,
+    k: B,
+    material: U32x16<B>,
+    uv: &TexCoords16<B>,
     lanes: Mask16,
     image: Mask16,
-) -> Vec3x16 {
+) -> Vec3x16<B> {
     let constant = t.colour(k, material, lanes.and_not(image));
     let textured = lanes & image;
     if !textured.any() {
@@ -91,7 +91,7 @@ fn albedo(
 /// every lane: the concentric map's sector swap is
 /// a lane select, the quarter-circle sine and cosine the scalar polynomial.
 #[inline(always)]
-fn cosine_hemisphere16(k: Avx512, u: [F32x16; 2]) -> Vec3x16 {
+fn cosine_hemisphere16<B: Lanes>(k: B, u: [F32x16<B>; 2]) -> Vec3x16<B> {
     let (zero, one, two) = (
         F32x16::splat(k, 0.0),
         F32x16::splat(k, 1.0),

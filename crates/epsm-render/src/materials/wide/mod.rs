@@ -38,40 +38,40 @@ mod tests;
 
 use glam::Vec3;
 
+use super::real::Real;
 #[cfg(doc)]
 use super::{Material, Texture};
-use crate::frame::Frames16;
-use crate::hit::TexCoords16;
-use crate::simd::{Avx512, F32x16, Mask16, U32x16, Vec3x16};
+use crate::bvh::{Frames16, TexCoords16};
+use crate::simd::{F32x16, Lanes, Mask16, U32x16, Vec3x16};
 use tables::Kinds;
 pub(crate) use tables::Materials16;
 
 /// Sixteen BSDF samples ([`super::BsdfSample`]'s fields by lane). Fields
 /// other than `found` are meaningful only in the lanes of `found`.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct BsdfSamples16 {
+pub(crate) struct BsdfSamples16<B: Lanes> {
     /// Lanes where `sample` returned `Some`.
     pub found: Mask16,
     /// Sampled directions, local frame.
-    pub wo: Vec3x16,
+    pub wo: Vec3x16<B>,
     /// `f·|cos θo| / pdf` (delta lobes: the lobe's weight).
-    pub weight: Vec3x16,
+    pub weight: Vec3x16<B>,
     /// Solid-angle pdf (delta lobes: the lobe choice's probability).
-    pub pdf: F32x16,
+    pub pdf: F32x16<B>,
     /// Relative IOR `η(wo side) / η(wi side)`; 1 for reflection.
-    pub eta: F32x16,
+    pub eta: F32x16<B>,
     /// Microfacet normals, local frame.
-    pub m: Vec3x16,
+    pub m: Vec3x16<B>,
     /// Lanes whose lobe is a delta ([`super::Lobe::is_delta`]).
     pub delta: Mask16,
     /// Lanes whose lobe transmits ([`super::Lobe::is_transmission`]).
     pub transmission: Mask16,
 }
 
-impl BsdfSamples16 {
+impl<B: Lanes> BsdfSamples16<B> {
     /// No sample: every field zero but `eta` (1) and `m` (`+z`).
     #[inline(always)]
-    fn none(k: Avx512) -> Self {
+    fn none(k: B) -> Self {
         let zero = Vec3x16::splat(k, Vec3::ZERO);
         Self {
             found: Mask16::NONE,
@@ -116,7 +116,7 @@ struct Sides {
 impl Sides {
     /// The sides of the non-dielectric lanes of `kinds` seen from `wi_z`.
     #[inline(always)]
-    fn of(k: Avx512, kinds: &Kinds, wi_z: F32x16) -> Self {
+    fn of<B: Lanes>(k: B, kinds: &Kinds, wi_z: F32x16<B>) -> Self {
         let zero = F32x16::splat(k, 0.0);
         let opaque = kinds.diffuse | kinds.conductor | kinds.rough;
         let front = wi_z.gt(zero) & opaque;
@@ -130,7 +130,7 @@ impl Sides {
     /// `Side::apply` in every lane: `w` mirrored through the tangent plane
     /// in the `back` lanes.
     #[inline(always)]
-    fn apply(&self, w: Vec3x16) -> Vec3x16 {
+    fn apply<B: Lanes>(&self, w: Vec3x16<B>) -> Vec3x16<B> {
         Vec3x16::new(w.x, w.y, F32x16::select(self.back, -w.z, w.z))
     }
 }
@@ -139,14 +139,14 @@ impl Materials16 {
     /// Lane `i` in `active`: `materials[material.lane(i)].to_local(&frame.lane(i), v.lane(i))`
     /// bit for bit; the other lanes are unspecified.
     #[inline(always)]
-    pub(crate) fn to_local16(
+    pub(crate) fn to_local16<B: Lanes>(
         &self,
-        k: Avx512,
-        material: U32x16,
-        frame: &Frames16,
-        v: Vec3x16,
+        k: B,
+        material: U32x16<B>,
+        frame: &Frames16<B>,
+        v: Vec3x16<B>,
         active: Mask16,
-    ) -> Vec3x16 {
+    ) -> Vec3x16<B> {
         let zero = F32x16::splat(k, 0.0);
         let z = v.dot(frame.n);
         let diffuse = self.kinds(k, material, active).diffuse;
@@ -162,7 +162,7 @@ impl Materials16 {
 
     /// Lanes in `active` whose material `is_delta()`.
     #[inline(always)]
-    pub(crate) fn is_delta16(&self, k: Avx512, material: U32x16, active: Mask16) -> Mask16 {
+    pub(crate) fn is_delta16<B: Lanes>(&self, k: B, material: U32x16<B>, active: Mask16) -> Mask16 {
         let kinds = self.kinds(k, material, active);
         kinds.conductor | kinds.dielectric
     }
@@ -172,16 +172,16 @@ impl Materials16 {
     /// Lanes outside `active` are not found.
     #[inline(always)]
     #[allow(clippy::too_many_arguments)] // the scalar `sample`'s inputs by lane, the token, the lanes
-    pub(crate) fn sample16(
+    pub(crate) fn sample16<B: Lanes>(
         &self,
-        k: Avx512,
-        material: U32x16,
-        wi: Vec3x16,
-        uv: &TexCoords16,
-        u_lobe: F32x16,
-        u: [F32x16; 2],
+        k: B,
+        material: U32x16<B>,
+        wi: Vec3x16<B>,
+        uv: &TexCoords16<B>,
+        u_lobe: F32x16<B>,
+        u: [F32x16<B>; 2],
         active: Mask16,
-    ) -> BsdfSamples16 {
+    ) -> BsdfSamples16<B> {
         let kinds = self.kinds(k, material, active);
         let sides = Sides::of(k, &kinds, wi.z);
         let wi_front = sides.apply(wi);
@@ -217,15 +217,15 @@ impl Materials16 {
     /// Lane `i` in `active`: `materials[m_i].eval(wi_i, wo_i, uv_i)` bit for
     /// bit; 0 in the other lanes.
     #[inline(always)]
-    pub(crate) fn eval16(
+    pub(crate) fn eval16<B: Lanes>(
         &self,
-        k: Avx512,
-        material: U32x16,
-        wi: Vec3x16,
-        wo: Vec3x16,
-        uv: &TexCoords16,
+        k: B,
+        material: U32x16<B>,
+        wi: Vec3x16<B>,
+        wo: Vec3x16<B>,
+        uv: &TexCoords16<B>,
         active: Mask16,
-    ) -> Vec3x16 {
+    ) -> Vec3x16<B> {
         // Smooth conductors and dielectrics, and unseen sides, give 0.
         let kinds = self.kinds(k, material, active);
         let sides = Sides::of(k, &kinds, wi.z);
@@ -247,14 +247,14 @@ impl Materials16 {
     /// Lane `i` in `active`: `materials[m_i].pdf(wi_i, wo_i, uv_i)` bit for
     /// bit (no pdf reads the texture coordinates); 0 in the other lanes.
     #[inline(always)]
-    pub(crate) fn pdf16(
+    pub(crate) fn pdf16<B: Lanes>(
         &self,
-        k: Avx512,
-        material: U32x16,
-        wi: Vec3x16,
-        wo: Vec3x16,
+        k: B,
+        material: U32x16<B>,
+        wi: Vec3x16<B>,
+        wo: Vec3x16<B>,
         active: Mask16,
-    ) -> F32x16 {
+    ) -> F32x16<B> {
         let kinds = self.kinds(k, material, active);
         let sides = Sides::of(k, &kinds, wi.z);
         let (wi, wo) = (sides.apply(wi), sides.apply(wo));
@@ -269,5 +269,24 @@ impl Materials16 {
             pdf = F32x16::select(rough, r, pdf);
         }
         pdf
+    }
+}
+
+impl<B: Lanes> Real for F32x16<B> {
+    type Token = B;
+
+    #[inline(always)]
+    fn constant(k: B, c: f32) -> Self {
+        F32x16::splat(k, c)
+    }
+
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        F32x16::sqrt(self)
+    }
+
+    #[inline(always)]
+    fn max(self, o: Self) -> Self {
+        F32x16::max(self, o)
     }
 }

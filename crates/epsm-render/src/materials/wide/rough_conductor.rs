@@ -10,19 +10,19 @@ use super::{BsdfSamples16, Materials16};
 #[cfg(doc)]
 use crate::materials::microfacet::Ggx;
 use crate::materials::microfacet::{d_above, lambda_off_horizon};
-use crate::simd::{Avx512, F32x16, LANES, Mask16, U32x16, Vec3x16};
+use crate::simd::{F32x16, LANES, Lanes, Mask16, U32x16, Vec3x16};
 
 /// `RoughConductor::sample` in the `lanes` (`found` a subset of them), `wi`
 /// local.
 #[inline(always)]
-pub(super) fn sample(
+pub(super) fn sample<B: Lanes>(
     t: &Materials16,
-    k: Avx512,
-    material: U32x16,
-    wi: Vec3x16,
-    u: [F32x16; 2],
+    k: B,
+    material: U32x16<B>,
+    wi: Vec3x16<B>,
+    u: [F32x16<B>; 2],
     lanes: Mask16,
-) -> BsdfSamples16 {
+) -> BsdfSamples16<B> {
     let (zero, one) = (F32x16::splat(k, 0.0), F32x16::splat(k, 1.0));
     let alpha = Materials16::param(&t.alpha, k, material, lanes);
     let (m, visible) = sample_visible(k, alpha, wi, u, lanes.and_not(wi.z.le(zero)));
@@ -45,14 +45,14 @@ pub(super) fn sample(
 /// `RoughConductor::eval` in the `lanes` (0 in the other lanes), `wi`, `wo`
 /// local.
 #[inline(always)]
-pub(super) fn eval(
+pub(super) fn eval<B: Lanes>(
     t: &Materials16,
-    k: Avx512,
-    material: U32x16,
-    wi: Vec3x16,
-    wo: Vec3x16,
+    k: B,
+    material: U32x16<B>,
+    wi: Vec3x16<B>,
+    wo: Vec3x16<B>,
     lanes: Mask16,
-) -> Vec3x16 {
+) -> Vec3x16<B> {
     let zero = F32x16::splat(k, 0.0);
     let (m, lanes, alpha) = reflection(t, k, material, wi, wo, lanes);
     let f = d(k, alpha, m) * g2(k, alpha, wi, wo) / (F32x16::splat(k, 4.0) * wi.z);
@@ -66,14 +66,14 @@ pub(super) fn eval(
 /// `RoughConductor::pdf` in the `lanes` (0 in the other lanes), `wi`, `wo`
 /// local.
 #[inline(always)]
-pub(super) fn pdf(
+pub(super) fn pdf<B: Lanes>(
     t: &Materials16,
-    k: Avx512,
-    material: U32x16,
-    wi: Vec3x16,
-    wo: Vec3x16,
+    k: B,
+    material: U32x16<B>,
+    wi: Vec3x16<B>,
+    wo: Vec3x16<B>,
     lanes: Mask16,
-) -> F32x16 {
+) -> F32x16<B> {
     let (m, lanes, alpha) = reflection(t, k, material, wi, wo, lanes);
     F32x16::select(
         lanes,
@@ -86,14 +86,14 @@ pub(super) fn pdf(
 /// `lanes` where it exists ([`half_vector`]), and the roughness of those
 /// lanes' materials.
 #[inline(always)]
-fn reflection(
+fn reflection<B: Lanes>(
     t: &Materials16,
-    k: Avx512,
-    material: U32x16,
-    wi: Vec3x16,
-    wo: Vec3x16,
+    k: B,
+    material: U32x16<B>,
+    wi: Vec3x16<B>,
+    wo: Vec3x16<B>,
     lanes: Mask16,
-) -> (Vec3x16, Mask16, F32x16) {
+) -> (Vec3x16<B>, Mask16, F32x16<B>) {
     let (m, reflects) = half_vector(k, wi, wo);
     let lanes = lanes & reflects;
     (m, lanes, Materials16::param(&t.alpha, k, material, lanes))
@@ -103,14 +103,14 @@ fn reflection(
 /// `m` from `wi`: `G1(wi) · D(m) / (4 wi.z)`, as the scalar `sample` and
 /// `pdf` compute it.
 #[inline(always)]
-fn reflection_pdf(k: Avx512, alpha: F32x16, wi: Vec3x16, m: Vec3x16) -> F32x16 {
+fn reflection_pdf<B: Lanes>(k: B, alpha: F32x16<B>, wi: Vec3x16<B>, m: Vec3x16<B>) -> F32x16<B> {
     g1(k, alpha, wi) * d(k, alpha, m) / (F32x16::splat(k, 4.0) * wi.z)
 }
 
 /// The reflection half vector, and the lanes where it exists (both
 /// directions above the surface, and a normalisable sum).
 #[inline(always)]
-fn half_vector(k: Avx512, wi: Vec3x16, wo: Vec3x16) -> (Vec3x16, Mask16) {
+fn half_vector<B: Lanes>(k: B, wi: Vec3x16<B>, wo: Vec3x16<B>) -> (Vec3x16<B>, Mask16) {
     let zero = F32x16::splat(k, 0.0);
     let (m, normalised) = try_normalize(k, wi + wo);
     (m, normalised.and_not(wi.z.le(zero) | wo.z.le(zero)))
@@ -118,14 +118,14 @@ fn half_vector(k: Avx512, wi: Vec3x16, wo: Vec3x16) -> (Vec3x16, Mask16) {
 
 /// [`Ggx::d`] in every lane.
 #[inline(always)]
-fn d(k: Avx512, alpha: F32x16, m: Vec3x16) -> F32x16 {
+fn d<B: Lanes>(k: B, alpha: F32x16<B>, m: Vec3x16<B>) -> F32x16<B> {
     let zero = F32x16::splat(k, 0.0);
     F32x16::select(m.z.le(zero), zero, d_above(k, alpha, m.x, m.y, m.z))
 }
 
 /// [`Ggx::lambda`] in every lane.
 #[inline(always)]
-fn lambda(k: Avx512, alpha: F32x16, w: Vec3x16) -> F32x16 {
+fn lambda<B: Lanes>(k: B, alpha: F32x16<B>, w: Vec3x16<B>) -> F32x16<B> {
     let z2 = w.z * w.z;
     F32x16::select(
         z2.eq(F32x16::splat(k, 0.0)),
@@ -136,14 +136,14 @@ fn lambda(k: Avx512, alpha: F32x16, w: Vec3x16) -> F32x16 {
 
 /// [`Ggx::g1`] in every lane.
 #[inline(always)]
-fn g1(k: Avx512, alpha: F32x16, w: Vec3x16) -> F32x16 {
+fn g1<B: Lanes>(k: B, alpha: F32x16<B>, w: Vec3x16<B>) -> F32x16<B> {
     let one = F32x16::splat(k, 1.0);
     one / (one + lambda(k, alpha, w))
 }
 
 /// [`Ggx::g2`] in every lane.
 #[inline(always)]
-fn g2(k: Avx512, alpha: F32x16, wi: Vec3x16, wo: Vec3x16) -> F32x16 {
+fn g2<B: Lanes>(k: B, alpha: F32x16<B>, wi: Vec3x16<B>, wo: Vec3x16<B>) -> F32x16<B> {
     let one = F32x16::splat(k, 1.0);
     one / (one + lambda(k, alpha, wi) + lambda(k, alpha, wo))
 }
@@ -151,13 +151,13 @@ fn g2(k: Avx512, alpha: F32x16, wi: Vec3x16, wo: Vec3x16) -> F32x16 {
 /// [`Ggx::sample_visible`] in the `lanes`: the normals, and the lanes where
 /// the scalar function returns `Some`.
 #[inline(always)]
-fn sample_visible(
-    k: Avx512,
-    alpha: F32x16,
-    wi: Vec3x16,
-    u: [F32x16; 2],
+fn sample_visible<B: Lanes>(
+    k: B,
+    alpha: F32x16<B>,
+    wi: Vec3x16<B>,
+    u: [F32x16<B>; 2],
     lanes: Mask16,
-) -> (Vec3x16, Mask16) {
+) -> (Vec3x16<B>, Mask16) {
     let (zero, one) = (F32x16::splat(k, 0.0), F32x16::splat(k, 1.0));
     // Stretch to the hemisphere configuration (α = 1).
     let (wi_std, stretched) = try_normalize(k, Vec3x16::new(alpha * wi.x, alpha * wi.y, wi.z));
@@ -176,7 +176,7 @@ fn sample_visible(
 /// `(cos φ, sin φ)` by the scalar libm functions in the `lanes` (0 in the
 /// others).
 #[inline(always)]
-fn cos_sin(k: Avx512, phi: F32x16, lanes: Mask16) -> (F32x16, F32x16) {
+fn cos_sin<B: Lanes>(k: B, phi: F32x16<B>, lanes: Mask16) -> (F32x16<B>, F32x16<B>) {
     let phi = phi.to_array();
     let (mut cos, mut sin) = ([0.0; LANES], [0.0; LANES]);
     for lane in lanes.lanes() {
@@ -189,13 +189,13 @@ fn cos_sin(k: Avx512, phi: F32x16, lanes: Mask16) -> (F32x16, F32x16) {
 /// glam's `try_normalize` in every lane: `v · (1/|v|)`, and the lanes where
 /// `1/|v|` is finite and positive (where glam returns `Some`).
 #[inline(always)]
-fn try_normalize(k: Avx512, v: Vec3x16) -> (Vec3x16, Mask16) {
+fn try_normalize<B: Lanes>(k: B, v: Vec3x16<B>) -> (Vec3x16<B>, Mask16) {
     let rcp = F32x16::splat(k, 1.0) / v.length();
     (v * rcp, rcp.is_finite() & rcp.gt(F32x16::splat(k, 0.0)))
 }
 
 /// [`reflect`](crate::materials::fresnel::reflect) in every lane.
 #[inline(always)]
-fn reflect(k: Avx512, wi: Vec3x16, m: Vec3x16) -> Vec3x16 {
+fn reflect<B: Lanes>(k: B, wi: Vec3x16<B>, m: Vec3x16<B>) -> Vec3x16<B> {
     -wi + m * (F32x16::splat(k, 2.0) * wi.dot(m))
 }

@@ -5,7 +5,7 @@
 use glam::Vec3;
 
 use crate::materials::{Bsdf, Material, Texture};
-use crate::simd::{Avx512, F32x16, Mask16, U32x16, Vec3x16};
+use crate::simd::{F32x16, Lanes, Mask16, U32x16, Vec3x16};
 
 /// Kind codes in the low bits of [`Materials16`]'s `class`.
 const DIFFUSE: u32 = 0;
@@ -106,7 +106,7 @@ impl Materials16 {
 
     /// The kinds and flags of the materials of the `active` lanes.
     #[inline(always)]
-    pub(super) fn kinds(&self, k: Avx512, material: U32x16, active: Mask16) -> Kinds {
+    pub(super) fn kinds<B: Lanes>(&self, k: B, material: U32x16<B>, active: Mask16) -> Kinds {
         let splat = |x: u32| U32x16::splat(k, x);
         let class = U32x16::gather(&self.class, material, active, splat(0));
         let kind = class & splat(KIND);
@@ -125,7 +125,7 @@ impl Materials16 {
     /// The constant colour (albedo or tint) of the materials of the `lanes`;
     /// 0 in the other lanes.
     #[inline(always)]
-    pub(super) fn colour(&self, k: Avx512, material: U32x16, lanes: Mask16) -> Vec3x16 {
+    pub(super) fn colour<B: Lanes>(&self, k: B, material: U32x16<B>, lanes: Mask16) -> Vec3x16<B> {
         let zero = F32x16::splat(k, 0.0);
         let [r, g, b] = &self.colour;
         Vec3x16::new(
@@ -137,7 +137,12 @@ impl Materials16 {
 
     /// A per-material parameter of the `lanes`; 0 in the other lanes.
     #[inline(always)]
-    pub(super) fn param(table: &[f32], k: Avx512, material: U32x16, lanes: Mask16) -> F32x16 {
+    pub(super) fn param<B: Lanes>(
+        table: &[f32],
+        k: B,
+        material: U32x16<B>,
+        lanes: Mask16,
+    ) -> F32x16<B> {
         F32x16::gather(table, material, lanes, F32x16::splat(k, 0.0))
     }
 }

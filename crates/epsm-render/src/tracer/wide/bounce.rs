@@ -3,10 +3,11 @@
 //! with the same operations, so every lane computes what the scalar loop
 //! computes for its path.
 
+use super::offset::offset_origins16;
 use super::{Objects16, Setup};
-use crate::ray::{Rays16, offset_origins16};
+use crate::bvh::Rays16;
 use crate::sampler::wide::{Block16, Streams16};
-use crate::simd::{Avx512, F32x16, Mask16, U32x16, Vec3x16};
+use crate::simd::{F32x16, Lanes, Mask16, U32x16, Vec3x16};
 use crate::tracer::{
     DIM_DIRECTION, DIM_FIRST_BOUNCE, DIM_LIGHT, DIM_LIGHT_SELECT, DIM_LOBE, DIM_ROULETTE,
     DIMS_PER_BOUNCE, SHADOW_EPS, TraceCounters,
@@ -15,34 +16,34 @@ use crate::tracer::{
 /// Sixteen paths in flight, one per lane: what the scalar bounce loop keeps
 /// in its local variables.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct Paths16 {
+pub(super) struct Paths16<B: Lanes> {
     /// Lanes holding a path.
     pub active: Mask16,
     /// Each lane's random stream.
-    pub streams: Streams16,
+    pub streams: Streams16<B>,
     /// The ray each path traces next (camera or continuation ray).
-    pub ray: Rays16,
+    pub ray: Rays16<B>,
     /// Path throughput.
-    pub beta: Vec3x16,
+    pub beta: Vec3x16<B>,
     /// Radiance gathered so far.
-    pub radiance: Vec3x16,
+    pub radiance: Vec3x16<B>,
     /// Product of η² over refractions (undone in Russian roulette).
-    pub eta_scale: F32x16,
+    pub eta_scale: F32x16<B>,
     /// The previous vertex's position (for MIS), where `has_prev`.
-    pub prev_p: Vec3x16,
+    pub prev_p: Vec3x16<B>,
     /// The pdf of the direction the previous vertex sampled, where `has_prev`.
-    pub prev_pdf: F32x16,
+    pub prev_pdf: F32x16<B>,
     /// Lanes whose previous vertex sampled a non-delta direction (not the
     /// camera, not a delta lobe): MIS applies.
     pub has_prev: Mask16,
     /// Scatterings so far (the bounce index).
-    pub depth: U32x16,
+    pub depth: U32x16<B>,
 }
 
 /// Power heuristic (β = 2) weight of a strategy with pdf `a` against `b`,
 /// as `tracer::path::mis`.
 #[inline(always)]
-fn mis(k: Avx512, a: F32x16, b: F32x16) -> F32x16 {
+fn mis<B: Lanes>(k: B, a: F32x16<B>, b: F32x16<B>) -> F32x16<B> {
     let (a2, b2) = (a * a, b * b);
     let sum = a2 + b2;
     let zero = k.f32(0.0);
@@ -51,17 +52,17 @@ fn mis(k: Avx512, a: F32x16, b: F32x16) -> F32x16 {
 
 /// `a + b` in the lanes of `m`, `a` in the others.
 #[inline(always)]
-fn add_where(m: Mask16, a: Vec3x16, b: Vec3x16) -> Vec3x16 {
+fn add_where<B: Lanes>(m: Mask16, a: Vec3x16<B>, b: Vec3x16<B>) -> Vec3x16<B> {
     Vec3x16::select(m, a + b, a)
 }
 
 /// Advances every active path by one bounce; returns the lanes whose path
 /// ended (their `radiance` is final).
 #[inline(always)]
-pub(super) fn bounce(
-    k: Avx512,
+pub(super) fn bounce<B: Lanes>(
+    k: B,
     setup: &Setup<'_>,
-    paths: &mut Paths16,
+    paths: &mut Paths16<B>,
     counters: &mut TraceCounters,
 ) -> Mask16 {
     let scene = setup.scene;
@@ -72,7 +73,7 @@ pub(super) fn bounce(
     let scatters = active & depth.lt(k.u32(setup.opts.max_depth));
     let first = k.u32(DIM_FIRST_BOUNCE) + depth * k.u32(DIMS_PER_BOUNCE);
     let first_bounce = depth.eq(k.u32(0));
-    let numbers: Block16 = paths.streams.block16(k, first, first_bounce);
+    let numbers: Block16<B> = paths.streams.block16(k, first, first_bounce);
     counters.rays += u64::from(active.count());
 
     // Find the next vertex; rays that leave see the background.

@@ -1,4 +1,5 @@
-//! The wide tracer: sixteen paths at once, one per AVX-512 lane, each lane
+//! The wide tracer: sixteen paths at once, one per vector lane (AVX-512,
+//! AVX2 or portable lanes: module `simd`), each lane
 //! doing what the scalar bounce loop (`tracer::path`) does for its path, in
 //! the same order and with the same operations, so the image is
 //! bit-identical to the scalar tracer's (ties between two primitives hit at
@@ -19,17 +20,18 @@
 //! | `RING` | 4096 | samples that may finish ahead of the oldest unfinished one; a lane waits while the ring is full |
 
 mod bounce;
+mod offset;
 mod queue;
 
 use glam::{UVec2, Vec3};
 
 use super::{DIM_FIRST_BOUNCE, DIMS_PER_BOUNCE, RenderOptions, TILE, TileOutput};
+use crate::bvh::Rays16;
 use crate::materials::wide::Materials16;
-use crate::ray::Rays16;
 use crate::sampler::STRATIFIED_DIMENSIONS;
 use crate::sampler::wide::Streams16;
 use crate::scene::Scene;
-use crate::simd::{Avx512, F32x16, LANES, Mask16, U32x16, Vec3x16};
+use crate::simd::{Backend, F32x16, LANES, Lanes, Mask16, U32x16, Vec3x16, WithLanes};
 use bounce::{Paths16, bounce};
 use queue::Queue;
 
@@ -78,42 +80,60 @@ struct Setup<'a> {
     materials: &'a Materials16,
 }
 
-/// The wide tracer of one render: the CPU token and the scene's lane
+/// The wide tracer of one render: the lane backend and the scene's lane
 /// tables.
 pub(super) struct WideTracer {
-    k: Avx512,
+    backend: Backend,
     objects: Objects16,
     materials: Materials16,
 }
 
 impl WideTracer {
-    /// The tracer for `scene`, when the CPU has AVX-512.
-    pub fn new(scene: &Scene) -> Option<Self> {
-        Some(Self {
-            k: Avx512::detect()?,
+    /// The tracer for `scene` with lanes of `backend`.
+    pub fn new(scene: &Scene, backend: Backend) -> Self {
+        Self {
+            backend,
             objects: Objects16::new(scene),
             materials: Materials16::new(scene.materials()),
-        })
+        }
     }
 
     /// Renders tile `tile` (in units of [`TILE`] pixels) with `opts.spp ≥ 1`
     /// samples per pixel.
-    #[allow(unsafe_code)]
     pub fn render_tile(&self, scene: &Scene, opts: &RenderOptions, tile: UVec2) -> TileOutput {
         debug_assert!(opts.spp >= 1);
-        // SAFETY: `render_tile_avx512` requires only the CPU features it
-        // enables, and `self.k` (an `Avx512` token) exists only on a CPU
-        // found to have each of them.
-        unsafe { render_tile_avx512(self.k, scene, opts, self, tile) }
+        self.backend.call(Tile {
+            scene,
+            opts,
+            tracer: self,
+            tile,
+        })
+    }
+}
+
+/// One tile to render, for [`Backend::call`].
+struct Tile<'a> {
+    scene: &'a Scene,
+    opts: &'a RenderOptions,
+    tracer: &'a WideTracer,
+    tile: UVec2,
+}
+
+impl WithLanes for Tile<'_> {
+    type Output = TileOutput;
+    #[inline(always)]
+    fn call<B: Lanes>(self, k: B) -> TileOutput {
+        render_tile_lanes(k, self.scene, self.opts, self.tracer, self.tile)
     }
 }
 
 /// Renders one tile: the sample queue, the lanes and the ring (module
-/// docs), compiled for AVX-512 so that the lane types' operations are
-/// single instructions.
-#[target_feature(enable = "avx512f,avx512vl,avx512dq,avx512bw,avx2,bmi1,bmi2,lzcnt,popcnt")]
-fn render_tile_avx512(
-    k: Avx512,
+/// docs). Inlined into [`Lanes::run`], so that it is compiled with the
+/// backend's features and the lane types' operations are single
+/// instructions.
+#[inline(always)]
+fn render_tile_lanes<B: Lanes>(
+    k: B,
     scene: &Scene,
     opts: &RenderOptions,
     tracer: &WideTracer,

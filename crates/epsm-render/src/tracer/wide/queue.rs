@@ -1,16 +1,16 @@
 //! A tile's sample queue: its pixel samples in the scalar tile loop's order
 //! (pixels row-major, each pixel's samples in order), started sixteen at a
 //! time. A batch's streams and camera rays are drawn in lanes
-//! ([`TileKeys::starts16`], [`FilmRays::rays16`]) and wait in a buffer
+//! ([`TileKeys::starts16`], [`film_dirs16`]) and wait in a buffer
 //! until lanes free up, which take them in queue order by expanding loads.
 
 use glam::UVec2;
 
+use crate::bvh::Rays16;
 use crate::camera::FilmRays;
-use crate::ray::Rays16;
 use crate::sampler::BLOCK;
 use crate::sampler::wide::{Streams16, TileKeys};
-use crate::simd::{Avx512, F32x16, LANES, Mask16, U32x16, U64x16, Vec3x16};
+use crate::simd::{F32x16, LANES, Lanes, Mask16, U32x16, U64x16, Vec3x16};
 
 /// A batch of started samples, by field and lane, for expanding loads.
 #[derive(Clone, Debug)]
@@ -83,12 +83,12 @@ impl Queue {
     /// those lanes' in `streams` and `ray`, their sequence numbers go to
     /// `queued`.
     #[inline(always)]
-    pub fn start(
+    pub fn start<B: Lanes>(
         &mut self,
-        k: Avx512,
+        k: B,
         fill: Mask16,
-        streams: &mut Streams16,
-        ray: &mut Rays16,
+        streams: &mut Streams16<B>,
+        ray: &mut Rays16<B>,
         queued: &mut [u64; LANES],
     ) {
         debug_assert!(u64::from(fill.count()) <= self.total - self.started);
@@ -126,7 +126,7 @@ impl Queue {
 
     /// Draws the next (up to) sixteen samples of the queue into the batch.
     #[inline(always)]
-    fn draw(&mut self, k: Avx512) {
+    fn draw<B: Lanes>(&mut self, k: B) {
         let len = (self.total - self.drawn).min(LANES as u64) as usize;
         debug_assert!(len > 0);
         let spp = u64::from(self.spp);
@@ -151,7 +151,7 @@ impl Queue {
             F32x16::gather(&self.film[0], pixel, m, zero) + starts.film[0],
             F32x16::gather(&self.film[1], pixel, m, zero) + starts.film[1],
         ];
-        let dir = self.film_rays.rays16(k, film);
+        let dir = film_dirs16(&self.film_rays, k, film);
         let b = &mut self.batch;
         b.key = U64x16::to_array(starts.key);
         for (out, number) in b.first.iter_mut().zip(starts.first) {
@@ -160,4 +160,16 @@ impl Queue {
         b.dir = [dir.x.to_array(), dir.y.to_array(), dir.z.to_array()];
         (b.len, b.taken) = (len, 0);
     }
+}
+
+/// The directions of [`FilmRays::ray`] in every lane (the same operations,
+/// so the same directions bit for bit; the origin is
+/// [`FilmRays::origin`]): the lanes' film positions' `x` and `y` (pixels)
+/// in, unit world-space directions out.
+#[inline(always)]
+fn film_dirs16<B: Lanes>(rays: &FilmRays, k: B, film: [F32x16<B>; 2]) -> Vec3x16<B> {
+    let sx = (k.f32(2.0) * film[0] / k.f32(rays.size.x) - k.f32(1.0)) * k.f32(rays.th_aspect);
+    let sy = (k.f32(1.0) - k.f32(2.0) * film[1] / k.f32(rays.size.y)) * k.f32(rays.th);
+    let dir = k.vec3(rays.forward) + k.vec3(rays.right) * sx + k.vec3(rays.up) * sy;
+    dir.normalize(k)
 }

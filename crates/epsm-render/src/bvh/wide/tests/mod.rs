@@ -1,7 +1,7 @@
 //! Every lane of the wide walks and shading points against the scalar
 //! functions, bit for bit: on random scenes (module `random`) and on the
-//! rays of renders of the shipped scenes (module `shipped`). Skipped (with a
-//! message) on a CPU without AVX-512.
+//! rays of renders of the shipped scenes (module `shipped`). Run on every
+//! backend the CPU has (the portable one always).
 //!
 //! A lane's closest hit may differ from the scalar one only by a tie: both
 //! hits on different primitives at the same `t` to within a few ULPs
@@ -10,22 +10,15 @@
 mod random;
 mod shipped;
 
+use super::Hits16;
+use super::Rays16;
 use super::walk::Policy;
 use crate::bvh::Accel;
-use crate::hit::{Hit, Hits16, SurfacePoint, TexCoords};
-use crate::ray::{Ray, Rays16};
+use crate::hit::{Hit, SurfacePoint, TexCoords};
+use crate::ray::Ray;
 use crate::scene::Object;
-use crate::simd::{Avx512, F32x16, LANES, Mask16, Vec3x16};
+use crate::simd::{F32x16, LANES, Lanes, Mask16, Vec3x16};
 use glam::Vec3;
-
-/// The token, or `None` (and a message) on a CPU without AVX-512.
-fn token() -> Option<Avx512> {
-    let k = Avx512::detect();
-    if k.is_none() {
-        eprintln!("no AVX-512 on this CPU: wide BVH tests skipped");
-    }
-    k
-}
 
 /// What a comparison saw.
 #[derive(Clone, Copy, Debug, Default)]
@@ -46,7 +39,7 @@ struct Tally {
 }
 
 /// The rays as lanes.
-fn packet(k: Avx512, rays: &[Ray; LANES]) -> Rays16 {
+fn packet<B: Lanes>(k: B, rays: &[Ray; LANES]) -> Rays16<B> {
     Rays16 {
         origin: Vec3x16::from_lanes(k, &rays.map(|r| r.origin)),
         dir: Vec3x16::from_lanes(k, &rays.map(|r| r.dir)),
@@ -95,8 +88,8 @@ fn point_bits(p: &SurfacePoint) -> Vec<u32> {
 /// shading points of `rays`, with the static BVH walked by each
 /// [`Policy`], with the scalar functions; panics on a difference other
 /// than a tie, and returns the lanes with a tie.
-fn compare(
-    k: Avx512,
+fn compare<B: Lanes>(
+    k: B,
     accel: &Accel,
     objects: &[Object],
     rays: &[Ray; LANES],
@@ -155,7 +148,13 @@ const POLICIES: [Policy; 4] = [
 /// scalar ones, and again with some static hits' shading-table index
 /// pointing at another triangle (a stale index: the scalar code then
 /// computes the point from the object).
-fn compare_points(k: Avx512, accel: &Accel, objects: &[Object], hits: &Hits16, tally: &mut Tally) {
+fn compare_points<B: Lanes>(
+    k: B,
+    accel: &Accel,
+    objects: &[Object],
+    hits: &Hits16<B>,
+    tally: &mut Tally,
+) {
     let lanes: [Option<Hit>; LANES] = std::array::from_fn(|i| hits.lane(i));
     let stale = lanes.map(|h| {
         h.map(|mut h| {

@@ -10,12 +10,12 @@ use std::sync::Arc;
 
 use glam::{DAffine3, DQuat, DVec3, Vec2, Vec3};
 
-use super::{Tally, compare, token};
+use super::{Tally, compare};
 use crate::bvh::Accel;
 use crate::bvh::test_support::push_soup_triangle;
 use crate::ray::Ray;
 use crate::scene::{Mesh, Object, ObjectId, Surface};
-use crate::simd::{LANES, Mask16};
+use crate::simd::{LANES, Lanes, Mask16};
 use epsm_testkit::Rng;
 
 /// A soup of `count` triangles in `[-1, 1]³`: a third thin slivers, a few
@@ -163,52 +163,55 @@ fn ray(rng: &mut Rng, objects: &[Object], scale: f64, i: usize) -> Ray {
 /// vertices and edges (none elsewhere).
 #[test]
 fn random_scenes_match_the_scalar_walks() {
-    let Some(k) = token() else { return };
-    let mut rng = Rng::new(29);
-    let mut total = Tally::default();
-    for case in 0..24 {
-        let (objects, dynamic) = scene(&mut rng, case);
-        let accel = Accel::build_with_dynamic(&objects, &dynamic);
-        let scale = [1.0, 1e-3, 1e3][case % 3];
-        let mut tally = Tally::default();
-        for p in 0..120 {
-            let rays: [Ray; LANES] = std::array::from_fn(|i| ray(&mut rng, &objects, scale, p + i));
-            let active = if p % 4 == 0 {
-                Mask16(rng.below(1 << 16) as u16)
-            } else {
-                Mask16::ALL
-            };
-            let ties = compare(k, &accel, &objects, &rays, active, &mut tally);
-            // Ties only where a ray is aimed at a vertex or an edge
-            // (`ray`'s case 1), which triangles may share.
-            let aimed = (0..LANES).filter(|i| (p + i) % 6 == 1);
-            let aimed = Mask16(aimed.fold(0, |m, i| m | 1 << i));
-            assert!(!ties.and_not(aimed).any(), "case {case}: ties {ties:?}");
+    fn on<B: Lanes>(k: B) {
+        let mut rng = Rng::new(29);
+        let mut total = Tally::default();
+        for case in 0..24 {
+            let (objects, dynamic) = scene(&mut rng, case);
+            let accel = Accel::build_with_dynamic(&objects, &dynamic);
+            let scale = [1.0, 1e-3, 1e3][case % 3];
+            let mut tally = Tally::default();
+            for p in 0..120 {
+                let rays: [Ray; LANES] =
+                    std::array::from_fn(|i| ray(&mut rng, &objects, scale, p + i));
+                let active = if p % 4 == 0 {
+                    Mask16(rng.below(1 << 16) as u16)
+                } else {
+                    Mask16::ALL
+                };
+                let ties = compare(k, &accel, &objects, &rays, active, &mut tally);
+                // Ties only where a ray is aimed at a vertex or an edge
+                // (`ray`'s case 1), which triangles may share.
+                let aimed = (0..LANES).filter(|i| (p + i) % 6 == 1);
+                let aimed = Mask16(aimed.fold(0, |m, i| m | 1 << i));
+                assert!(!ties.and_not(aimed).any(), "case {case}: ties {ties:?}");
+            }
+            assert!(tally.hits > tally.rays / 4, "case {case}: {tally:?}");
+            let spheres = objects
+                .iter()
+                .filter(|o| o.surface == Surface::Sphere)
+                .count();
+            assert!(
+                spheres == 0 || tally.sphere_hits > 0,
+                "case {case}: {tally:?}"
+            );
+            for (sum, add) in [
+                (&mut total.rays, tally.rays),
+                (&mut total.hits, tally.hits),
+                (&mut total.sphere_hits, tally.sphere_hits),
+                (&mut total.occluded, tally.occluded),
+                (&mut total.ties, tally.ties),
+                (&mut total.points, tally.points),
+            ] {
+                *sum += add;
+            }
         }
-        assert!(tally.hits > tally.rays / 4, "case {case}: {tally:?}");
-        let spheres = objects
-            .iter()
-            .filter(|o| o.surface == Surface::Sphere)
-            .count();
+        eprintln!("{total:?}");
+        assert!(total.ties * 1000 <= total.rays, "{total:?}");
         assert!(
-            spheres == 0 || tally.sphere_hits > 0,
-            "case {case}: {tally:?}"
+            total.sphere_hits > 1000 && total.occluded > 10_000,
+            "{total:?}"
         );
-        for (sum, add) in [
-            (&mut total.rays, tally.rays),
-            (&mut total.hits, tally.hits),
-            (&mut total.sphere_hits, tally.sphere_hits),
-            (&mut total.occluded, tally.occluded),
-            (&mut total.ties, tally.ties),
-            (&mut total.points, tally.points),
-        ] {
-            *sum += add;
-        }
     }
-    eprintln!("{total:?}");
-    assert!(total.ties * 1000 <= total.rays, "{total:?}");
-    assert!(
-        total.sphere_hits > 1000 && total.occluded > 10_000,
-        "{total:?}"
-    );
+    crate::simd::each_backend!(on);
 }

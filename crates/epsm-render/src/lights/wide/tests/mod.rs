@@ -1,8 +1,8 @@
 //! Every lane of every sixteen-lane light function against the scalar
 //! function, bit for bit: on random scenes ([`random`]) and on the shipped
 //! Cornell and caustic boxes, from reference points on the emitters, in
-//! their planes and on either side. Skipped (with a message) on a CPU
-//! without AVX-512.
+//! their planes and on either side, on every backend the CPU has (the
+//! portable one always).
 
 mod random;
 
@@ -11,18 +11,9 @@ use std::path::Path;
 use glam::{Vec2, Vec3};
 
 use super::super::{Background, LightPoint, LightSample, LightTable};
-use crate::simd::{Avx512, F32x16, LANES, Mask16, U32x16, Vec3x16};
+use crate::simd::{F32x16, LANES, Lanes, Mask16, U32x16, Vec3x16};
 use epsm_testkit::Rng;
 use random::{emitter_point, lanes, random_table, reference, uniform};
-
-/// The token, or `None` (and a message) on a CPU without AVX-512.
-fn token() -> Option<Avx512> {
-    let k = Avx512::detect();
-    if k.is_none() {
-        eprintln!("no AVX-512 on this CPU: wide light tests skipped");
-    }
-    k
-}
 
 /// Equal bit patterns, or both NaN.
 fn same(a: f32, b: f32) -> bool {
@@ -46,7 +37,7 @@ struct Inputs {
 
 impl Inputs {
     /// The inputs as `sample16` takes them.
-    fn lanes(&self, k: Avx512) -> (Vec3x16, F32x16, [F32x16; 2]) {
+    fn lanes<B: Lanes>(&self, k: B) -> (Vec3x16<B>, F32x16<B>, [F32x16<B>; 2]) {
         let u = [self.u.map(|u| u.x), self.u.map(|u| u.y)];
         (
             Vec3x16::from_lanes(k, &self.p),
@@ -82,7 +73,7 @@ struct SampleLane {
 /// Compares `sample16`, `pdf_area16`, `pdf_background16` and `eval16` with
 /// the scalar functions on `rounds` random batches of `table`; returns how
 /// many active lanes found an area light, a point light and the background.
-fn check_table(k: Avx512, table: &LightTable, rng: &mut Rng, rounds: usize) -> [usize; 3] {
+fn check_table<B: Lanes>(k: B, table: &LightTable, rng: &mut Rng, rounds: usize) -> [usize; 3] {
     let mut found = [0; 3];
     for _ in 0..rounds {
         let inputs = Inputs {
@@ -131,7 +122,13 @@ fn check_table(k: Avx512, table: &LightTable, rng: &mut Rng, rounds: usize) -> [
 /// `pdf_area16` on points of emitter triangles (of emitters, non-emitters
 /// and objects out of range) with normals of either orientation or none,
 /// and `pdf_background16` and `eval16` on directions, from `p`.
-fn check_pdfs(k: Avx512, table: &LightTable, rng: &mut Rng, p: &[Vec3; LANES], active: Mask16) {
+fn check_pdfs<B: Lanes>(
+    k: B,
+    table: &LightTable,
+    rng: &mut Rng,
+    p: &[Vec3; LANES],
+    active: Mask16,
+) {
     let objects = table.emitter_of_object.len();
     let (mut object, mut triangle) = ([0u32; LANES], [0u32; LANES]);
     let (mut y, mut n) = ([Vec3::ZERO; LANES], [Vec3::ZERO; LANES]);
@@ -190,41 +187,46 @@ fn check_pdfs(k: Avx512, table: &LightTable, rng: &mut Rng, p: &[Vec3; LANES], a
 
 #[test]
 fn random_scenes_match_the_scalar_functions_lane_by_lane() {
-    let Some(k) = token() else { return };
-    let mut rng = Rng::new(31);
-    // Found lanes: area, point, constant background, environment map.
-    let (mut found, mut small, mut large) = ([0; 4], 0, 0);
-    for _ in 0..300 {
-        let table = random_table(&mut rng);
-        match table.selection.as_ref().map(|s| s.small_table().is_some()) {
-            Some(true) => small += 1,
-            Some(false) => large += 1,
-            None => {}
+    fn on<B: Lanes>(k: B) {
+        let mut rng = Rng::new(31);
+        // Found lanes: area, point, constant background, environment map.
+        let (mut found, mut small, mut large) = ([0; 4], 0, 0);
+        for _ in 0..300 {
+            let table = random_table(&mut rng);
+            match table.selection.as_ref().map(|s| s.small_table().is_some()) {
+                Some(true) => small += 1,
+                Some(false) => large += 1,
+                None => {}
+            }
+            let [area, point, background] = check_table(k, &table, &mut rng, 20);
+            let map = usize::from(matches!(table.background, Background::EnvMap(_)));
+            found[0] += area;
+            found[1] += point;
+            found[2 + map] += background;
         }
-        let [area, point, background] = check_table(k, &table, &mut rng, 20);
-        let map = usize::from(matches!(table.background, Background::EnvMap(_)));
-        found[0] += area;
-        found[1] += point;
-        found[2 + map] += background;
+        assert!(
+            small > 20 && large > 10,
+            "{small} small and {large} large selection tables"
+        );
+        assert!(
+            found.iter().all(|&n| n > 500),
+            "area, point, constant, map: {found:?}"
+        );
     }
-    assert!(
-        small > 20 && large > 10,
-        "{small} small and {large} large selection tables"
-    );
-    assert!(
-        found.iter().all(|&n| n > 500),
-        "area, point, constant, map: {found:?}"
-    );
+    crate::simd::each_backend!(on);
 }
 
 #[test]
 fn shipped_scenes_match_the_scalar_functions_lane_by_lane() {
-    let Some(k) = token() else { return };
-    let mut rng = Rng::new(32);
-    for name in ["cornell-box", "caustic-box"] {
-        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../../scenes/{name}.toml"));
-        let scene = crate::scene::load::load_scene(&path).expect("shipped scene loads");
-        let [area, ..] = check_table(k, scene.lights(), &mut rng, 2000);
-        assert!(area > 1000, "{name}: only {area} area samples found");
+    fn on<B: Lanes>(k: B) {
+        let mut rng = Rng::new(32);
+        for name in ["cornell-box", "caustic-box"] {
+            let path =
+                Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../../scenes/{name}.toml"));
+            let scene = crate::scene::load::load_scene(&path).expect("shipped scene loads");
+            let [area, ..] = check_table(k, scene.lights(), &mut rng, 2000);
+            assert!(area > 1000, "{name}: only {area} area samples found");
+        }
     }
+    crate::simd::each_backend!(on);
 }
