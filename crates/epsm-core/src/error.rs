@@ -72,7 +72,7 @@ mod tests {
 
     #[test]
     fn a_render_io_error_names_its_cause_once() {
-        let e = epsm_render::scene::load::load_scene("/nonexistent/scene.toml".as_ref())
+        let e = epsm_scene::load::load_scene("/nonexistent/scene.toml".as_ref())
             .expect_err("no such file");
         let line = error_chain(&e);
         assert_eq!(

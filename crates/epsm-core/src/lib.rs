@@ -55,7 +55,7 @@
 //! ```no_run
 //! use epsm_core::{ParamTable, SolveSettings, classify, solve_adjoint};
 //! use epsm_render::record::RecordLevel;
-//! use epsm_render::scene::load::load_scene;
+//! use epsm_scene::load::load_scene;
 //! use epsm_render::tracer::{RenderOptions, render_recorded};
 //! # fn main() -> Result<(), Box<dyn std::error::Error>> {
 //! let scene = load_scene("scenes/mirror.toml".as_ref())?;

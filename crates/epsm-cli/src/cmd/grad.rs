@@ -17,7 +17,7 @@ use epsm_core::inspect::{
 };
 use epsm_core::load_problem;
 use epsm_render::Image;
-use epsm_render::image_io::linear_to_srgb;
+use epsm_scene::image_io::linear_to_srgb;
 
 use plotters::prelude::*;
 

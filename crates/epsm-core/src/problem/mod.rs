@@ -2,7 +2,7 @@
 //! the target, the loss, the optimizer and the output settings, loaded from
 //! a TOML problem file ([`desc`], `docs/problem-format.md`) or built in code.
 //!
-//! Every malformed field gives a located [`epsm_render::SceneError`] (file, line, dotted
+//! Every malformed field gives a located [`epsm_scene::SceneError`] (file, line, dotted
 //! field) through [`crate::OptimizeError::Render`]; nothing panics.
 //!
 //! ```toml
@@ -242,12 +242,12 @@ impl Problem {
 
 /// Loads and checks the problem file at `path`.
 pub fn load_problem(path: &Path) -> OptResult<Problem> {
-    problem_from_str(&epsm_render::input_file::read_to_string(path)?, path)
+    problem_from_str(&epsm_scene::input_file::read_to_string(path)?, path)
 }
 
 /// Checks the text of a problem file; `file` names it in errors and its
 /// directory resolves relative paths.
 pub fn problem_from_str(text: &str, file: &Path) -> OptResult<Problem> {
-    let (desc, locator) = epsm_render::scene::load::parse_toml::<ProblemDesc>(text, file)?;
+    let (desc, locator) = epsm_scene::load::parse_toml::<ProblemDesc>(text, file)?;
     validate::problem(&desc, file, &locator)
 }

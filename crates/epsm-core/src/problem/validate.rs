@@ -5,7 +5,7 @@ use std::path::Path;
 
 use epsm_ot::{MIN_BLUR, MatchLimits};
 use epsm_render::Scene;
-use epsm_render::scene::load::{Ctx, Locator, load_parts, parts_from_desc};
+use epsm_scene::load::{Ctx, Locator, load_parts, parts_from_desc};
 
 use super::auto::scale;
 use super::desc::ProblemDesc;
@@ -117,9 +117,9 @@ pub(super) fn problem(d: &ProblemDesc, file: &Path, locator: &Locator) -> OptRes
     let target = match &d.target.image {
         Some(path) => {
             let path = c.resolve(path);
-            let img = epsm_render::image_io::read_image(&path)
+            let img = epsm_scene::image_io::read_image(&path)
                 .and_then(|img| {
-                    epsm_render::image_io::check_values(&path, &img, f32::INFINITY)?;
+                    epsm_scene::image_io::check_values(&path, &img, f32::INFINITY)?;
                     Ok(img)
                 })
                 .map_err(|e| c.err("target.image", e.to_string()))?;

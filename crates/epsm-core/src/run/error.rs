@@ -6,7 +6,10 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 pub enum OptimizeError {
     /// The scene, a problem field, an image or a file write failed in the
-    /// renderer's loaders (located: file, line, field).
+    /// scene loaders (located: file, line, field).
+    #[error(transparent)]
+    Scene(#[from] epsm_scene::Error),
+    /// The renderer refused a scene (an emissive exact sphere, ...).
     #[error(transparent)]
     Render(#[from] epsm_render::Error),
     /// A parameter key does not fit the scene.

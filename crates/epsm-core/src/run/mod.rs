@@ -25,7 +25,7 @@
 //!
 //! ```no_run
 //! use epsm_core::{Optimization, ParamSpec, Problem};
-//! let scene = epsm_render::scene::load_parts("scenes/layout.toml".as_ref())?;
+//! let scene = epsm_scene::load_parts("scenes/layout.toml".as_ref())?;
 //! let params = vec![ParamSpec::new("table.translate.x", -0.5, 0.04).with_true(0.0)];
 //! let mut opt = Optimization::new(Problem::new(scene, params))?;
 //! while !opt.is_done() {
