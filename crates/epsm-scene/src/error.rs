@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 /// `camera.fov`; `line` is 1-based when the parser knows it.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[error("{}{}: {field}: {message}", file.display(), line.map(|l| format!(":{l}")).unwrap_or_default())]
-pub struct SceneError {
+pub struct FieldError {
     /// The file the error is in.
     pub file: PathBuf,
     /// 1-based line, when known.
@@ -18,7 +18,7 @@ pub struct SceneError {
     pub message: String,
 }
 
-impl SceneError {
+impl FieldError {
     /// A new error for `field` of `file`.
     pub fn new(
         file: impl Into<PathBuf>,
@@ -56,7 +56,7 @@ pub fn shown(v: f64) -> String {
 pub enum Error {
     /// A scene file (or a file it references) is malformed.
     #[error(transparent)]
-    Scene(#[from] SceneError),
+    Field(#[from] FieldError),
     /// Reading or writing a file failed.
     #[error("{}: {source}", path.display())]
     Io {

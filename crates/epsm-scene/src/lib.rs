@@ -15,7 +15,9 @@
 //!   [`Image`](epsm_render::Image)s;
 //! - [`input_file`], [`atomic_file`]: the one guard in front of every input
 //!   file and the one writer of every output file of epsm;
-//! - [`error`]: [`SceneError`] (file, line, dotted field) and [`Error`].
+//! - [`fields`]: located TOML documents: parsing into serde types and value
+//!   checks by dotted field, for scene files and the files that embed one;
+//! - [`error`]: [`FieldError`] (file, line, dotted field) and [`Error`].
 //!
 //! ## Conventions
 //! The scene model's conventions (units, angles, colour, frames) are
@@ -31,6 +33,7 @@
 pub mod atomic_file;
 pub mod desc;
 pub mod error;
+pub mod fields;
 pub mod image_io;
 pub mod import;
 pub mod input_file;
@@ -40,5 +43,5 @@ pub mod shapes;
 /// The renderer whose types this crate builds (re-exported so that a user
 /// names them at the same version).
 pub use epsm_render;
-pub use error::{Error, Result, SceneError};
+pub use error::{Error, FieldError, Result};
 pub use load::{Loaded, load_file, load_parts, load_scene, parts_from_str};

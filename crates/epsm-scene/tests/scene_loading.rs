@@ -189,8 +189,8 @@ fn semantic_errors_carry_the_line_of_their_field() {
                 [[objects]]\nname = \"a\"\nshape = \"cube\"\nmaterial = \"w\"\n\
                 [[objects]]\nname = \"b\"\nshape = \"cube\"\nmaterial = \"nope\"\n";
     let err = parts_from_str(text, Path::new("dir/s.toml")).expect_err("unknown material");
-    let epsm_scene::Error::Scene(e) = err else {
-        panic!("expected a scene error, got {err}")
+    let epsm_scene::Error::Field(e) = err else {
+        panic!("expected a field error, got {err}")
     };
     assert_eq!(e.field, "objects[1].material");
     assert_eq!(e.line, Some(14));
@@ -207,16 +207,17 @@ struct Problem {
 
 #[test]
 fn an_embedded_scene_reports_prefixed_fields_and_file_lines() {
-    use epsm_scene::load::{parse_toml, parts_from_desc};
+    use epsm_scene::fields::parse;
+    use epsm_scene::load::parts_from_desc;
     let text = "iterations = 10\n[scene.camera]\norigin = [0, 0, 5]\ntarget = [0, 0, 0]\n\
                 resolution = [8, 8]\n[scene.materials.w]\ntype = \"diffuse\"\n\
                 [[scene.objects]]\nname = \"a\"\nshape = \"cube\"\nmaterial = \"w\"\nscale = 0\n";
     let file = Path::new("problem.toml");
-    let (problem, locator) = parse_toml::<Problem>(text, file).expect("valid TOML");
+    let (problem, locator) = parse::<Problem>(text, file).expect("valid TOML");
     assert_eq!(problem.iterations, 10);
     let err = parts_from_desc(&problem.scene, file, &locator, "scene").expect_err("zero scale");
-    let epsm_scene::Error::Scene(e) = err else {
-        panic!("expected a scene error, got {err}")
+    let epsm_scene::Error::Field(e) = err else {
+        panic!("expected a field error, got {err}")
     };
     assert_eq!(
         (e.field.as_str(), e.line),
@@ -227,11 +228,11 @@ fn an_embedded_scene_reports_prefixed_fields_and_file_lines() {
 #[test]
 fn scene_descriptions_survive_a_toml_round_trip() {
     use epsm_scene::desc::SceneDesc;
-    use epsm_scene::load::parse_toml;
-    let (desc, _) = parse_toml::<SceneDesc>(&doc_example(), Path::new("example.toml"))
-        .expect("the example parses");
+    use epsm_scene::fields::parse;
+    let (desc, _) =
+        parse::<SceneDesc>(&doc_example(), Path::new("example.toml")).expect("the example parses");
     let text = toml::to_string(&desc).expect("serializes");
-    let (back, _) = parse_toml::<SceneDesc>(&text, Path::new("again.toml")).expect("reparses");
+    let (back, _) = parse::<SceneDesc>(&text, Path::new("again.toml")).expect("reparses");
     assert_eq!(back, desc);
 }
 

@@ -4,7 +4,7 @@
 use std::borrow::Cow;
 
 use epsm_render::scene::{MaterialId, ObjectId};
-use epsm_scene::load::MIN_ALPHA;
+use epsm_scene::fields::MIN_ALPHA;
 
 use crate::error::{Error, Result};
 

@@ -23,7 +23,7 @@ use std::path::{Path, PathBuf};
 use glam::{DAffine3, DMat4, Vec2, Vec3};
 use gltf::accessor::{DataType, Dimensions};
 
-use crate::error::{Error, Result, SceneError, shown};
+use crate::error::{Error, FieldError, Result, shown};
 use epsm_render::scene::Mesh;
 
 /// Reads the glTF or GLB file at `path` into one mesh (not yet validated).
@@ -41,7 +41,7 @@ pub fn load(path: &Path) -> Result<Mesh> {
         for prim in m.primitives() {
             let field = format!("meshes[{}].primitives[{}]", m.index(), prim.index());
             let mut part =
-                primitive(&prim, &file.buffers).map_err(|msg| SceneError::new(path, field, msg))?;
+                primitive(&prim, &file.buffers).map_err(|msg| FieldError::new(path, field, msg))?;
             for p in &mut part.positions {
                 *p = world.transform_point3(p.as_dvec3()).as_vec3();
             }
@@ -68,7 +68,7 @@ pub(crate) struct File {
 /// Parses `bytes` (JSON glTF or GLB) and loads its buffers (external ones
 /// relative to `file`'s directory).
 pub(crate) fn open(bytes: &[u8], file: &Path) -> Result<File> {
-    let fail = |field: &str, msg: String| Error::from(SceneError::new(file, field, msg));
+    let fail = |field: &str, msg: String| Error::from(FieldError::new(file, field, msg));
     // The gltf crate subtracts the header size from the declared GLB length unchecked.
     if let Some(len) = bytes.strip_prefix(b"glTF").and_then(|r| r.get(4..8)) {
         let declared = u32::from_le_bytes([len[0], len[1], len[2], len[3]]);
@@ -169,7 +169,7 @@ const ROTATION_TOLERANCE: f64 = 1e-3;
 /// quaternion (within [`ROTATION_TOLERANCE`]) and a non-finite or singular
 /// transform.
 pub(crate) fn walk<'a>(doc: &'a gltf::Document, file: &Path) -> Result<Vec<Placed<'a>>> {
-    let fail = |field: String, msg: &str| Error::from(SceneError::new(file, field, msg));
+    let fail = |field: String, msg: &str| Error::from(FieldError::new(file, field, msg));
     let scene = doc
         .default_scene()
         .or_else(|| doc.scenes().next())

@@ -27,7 +27,7 @@ pub mod ply;
 
 use std::path::Path;
 
-use crate::error::{Result, SceneError};
+use crate::error::{FieldError, Result};
 use epsm_render::scene::Mesh;
 
 /// Loads and validates a mesh file, choosing the importer by extension
@@ -42,7 +42,7 @@ pub fn load_mesh(path: &Path) -> Result<Mesh> {
         Some("ply") => ply::load(path)?,
         Some("gltf" | "glb") => gltf::load(path)?,
         _ => {
-            return Err(SceneError::new(
+            return Err(FieldError::new(
                 path,
                 "mesh",
                 "unsupported mesh format: expected a .obj, .ply, .gltf or .glb file",
@@ -57,7 +57,7 @@ pub fn load_mesh(path: &Path) -> Result<Mesh> {
 /// Checks the invariants every mesh must hold (see the module table);
 /// `file` names the mesh in errors.
 pub fn validate(mesh: &Mesh, file: &Path) -> Result<()> {
-    let err = |field: String, message: String| SceneError::new(file, field, message);
+    let err = |field: String, message: String| FieldError::new(file, field, message);
     if mesh.indices.is_empty() {
         return Err(err("triangles".into(), "the mesh has no triangles".into()).into());
     }

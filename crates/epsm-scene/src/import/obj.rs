@@ -17,7 +17,7 @@ use std::path::Path;
 
 use glam::{Vec2, Vec3};
 
-use crate::error::{Result, SceneError};
+use crate::error::{FieldError, Result};
 use epsm_render::scene::Mesh;
 
 /// Reads the OBJ file at `path` into one mesh (not yet validated).
@@ -39,7 +39,7 @@ pub fn parse(bytes: &[u8], file: &Path) -> Result<Mesh> {
         tobj::load_obj_buf(&mut std::io::BufReader::new(bytes), &options, |_| {
             Err(tobj::LoadError::OpenFileFailed)
         })
-        .map_err(|e| SceneError::new(path, "obj", format!("malformed OBJ: {e}")))?;
+        .map_err(|e| FieldError::new(path, "obj", format!("malformed OBJ: {e}")))?;
     let mut mesh = Mesh::default();
     for model in models {
         super::append(&mut mesh, convert(model.mesh, path, &model.name)?);
@@ -68,7 +68,7 @@ fn convert(m: tobj::Mesh, path: &Path, name: &str) -> Result<Mesh> {
     };
     if !m.indices.len().is_multiple_of(3) {
         let msg = format!("{} indices do not form triangles", m.indices.len());
-        return Err(SceneError::new(path, name.to_owned(), msg).into());
+        return Err(FieldError::new(path, name.to_owned(), msg).into());
     }
     let indices = m
         .indices

@@ -7,13 +7,13 @@ use std::sync::Arc;
 
 use glam::DVec3;
 
-use super::check::Ctx;
 use super::named::NamedFile;
 use super::object::Objects;
 use crate::desc::{
     BackgroundDesc, CameraDesc, LightDesc, MaterialDesc, MaterialType, RenderDesc, SceneDesc,
 };
 use crate::error::{Error, Result};
+use crate::fields::Fields;
 use crate::image_io::{check_values, is_supported, read_image};
 use epsm_render::camera::Camera;
 use epsm_render::film::Image;
@@ -32,7 +32,7 @@ pub const MAX_DEPTH: u32 = 1024;
 pub type ImageCache = HashMap<NamedFile, Arc<Image>>;
 
 /// Builds all parts of `desc`.
-pub fn parts(desc: &SceneDesc, ctx: &Ctx) -> Result<SceneParts> {
+pub fn parts(desc: &SceneDesc, ctx: &Fields) -> Result<SceneParts> {
     let camera = camera(&desc.camera, ctx)?;
     let settings = render(&desc.render, ctx)?;
     let mut images = ImageCache::new();
@@ -67,7 +67,7 @@ pub fn parts(desc: &SceneDesc, ctx: &Ctx) -> Result<SceneParts> {
     })
 }
 
-fn camera(c: &CameraDesc, ctx: &Ctx) -> Result<Camera> {
+fn camera(c: &CameraDesc, ctx: &Fields) -> Result<Camera> {
     let view = View {
         origin: ctx.vec3("camera.origin", c.origin)?,
         target: ctx.vec3("camera.target", c.target)?,
@@ -96,7 +96,7 @@ pub(crate) struct View {
 /// The camera of `view`, checked (field of view in (0, 180), resolution in
 /// range, a defined view direction, `up` not parallel to it); errors name
 /// `{field}.fov`, `{field}.resolution[i]`, `{field}.target` or `{field}.up`.
-pub(crate) fn checked_camera(view: &View, field: &str, ctx: &Ctx) -> Result<Camera> {
+pub(crate) fn checked_camera(view: &View, field: &str, ctx: &Fields) -> Result<Camera> {
     let fov = view.fov_y;
     if !(fov > 0.0 && fov < 180.0) {
         let msg = format!("expected degrees in (0, 180), found {fov}");
@@ -120,7 +120,7 @@ pub(crate) fn checked_camera(view: &View, field: &str, ctx: &Ctx) -> Result<Came
     Camera::look_at(origin, target, up, fov, w, h).ok_or_else(parallel)
 }
 
-fn render(r: &RenderDesc, ctx: &Ctx) -> Result<RenderSettings> {
+fn render(r: &RenderDesc, ctx: &Fields) -> Result<RenderSettings> {
     Ok(RenderSettings {
         spp: ctx.count("render.spp", r.spp, 1, u32::MAX)?,
         max_depth: ctx.count("render.max_depth", r.max_depth, 1, MAX_DEPTH)?,
@@ -135,7 +135,7 @@ pub(crate) fn image(
     field: &str,
     relative: &str,
     max: f32,
-    ctx: &Ctx,
+    ctx: &Fields,
     images: &mut ImageCache,
 ) -> Result<Arc<Image>> {
     let path = ctx.resolve(relative);
@@ -156,7 +156,7 @@ pub(crate) fn image(
     Ok(img)
 }
 
-fn background(b: &BackgroundDesc, ctx: &Ctx, images: &mut ImageCache) -> Result<Background> {
+fn background(b: &BackgroundDesc, ctx: &Fields, images: &mut ImageCache) -> Result<Background> {
     match (&b.color, &b.envmap) {
         (Some(_), Some(_)) => Err(ctx.err("background", "give either color or envmap, not both")),
         (None, None) => Err(ctx.err("background", "expected color or envmap")),
@@ -186,7 +186,12 @@ fn background(b: &BackgroundDesc, ctx: &Ctx, images: &mut ImageCache) -> Result<
     }
 }
 
-fn material(name: &str, m: &MaterialDesc, ctx: &Ctx, images: &mut ImageCache) -> Result<Material> {
+fn material(
+    name: &str,
+    m: &MaterialDesc,
+    ctx: &Fields,
+    images: &mut ImageCache,
+) -> Result<Material> {
     let field = format!("materials.{name}");
     if name.trim().is_empty() {
         return Err(ctx.err(&field, "material name must not be empty"));
@@ -257,7 +262,7 @@ fn light<'n>(
     field: &str,
     l: &'n LightDesc,
     names: &mut HashSet<&'n str>,
-    ctx: &Ctx,
+    ctx: &Fields,
 ) -> Result<PointLight, Error> {
     ctx.unique_name(&format!("{field}.name"), &l.name, names, "light")?;
     Ok(PointLight {

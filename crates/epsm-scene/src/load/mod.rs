@@ -2,7 +2,7 @@
 //! [`import`](super::import), see [`load_file`]). The TOML format is
 //! [`desc`](super::desc), documented in `docs/scene-format.md`: parse the TOML, deserialize it with unknown keys
 //! rejected, check every value against its documented range and build the
-//! [`SceneParts`]. Every error is a [`SceneError`] naming the file, the dotted
+//! [`SceneParts`]. Every error is a [`FieldError`] naming the file, the dotted
 //! field (`objects[2].material`) and what was expected, with the line when the
 //! file has one. Relative paths (meshes, textures, environment maps) resolve
 //! against the scene file's directory; each mesh or image file is read once
@@ -25,21 +25,16 @@
 //! ```
 
 pub(crate) mod build;
-pub(crate) mod check;
-mod locate;
 pub(crate) mod named;
 pub(crate) mod object;
 
 use std::path::Path;
 
-use serde::de::DeserializeOwned;
-
 pub use build::MAX_DEPTH;
-pub use check::{Ctx, MIN_ALPHA};
-pub use locate::Locator;
 
 use crate::desc::SceneDesc;
-use crate::error::{Error, Result, SceneError};
+use crate::error::{FieldError, Result};
+use crate::fields::{self, Fields, Locator};
 use crate::import::{gltf_scene, mitsuba};
 use epsm_render::scene::{Scene, SceneParts};
 
@@ -66,7 +61,7 @@ pub struct Loaded {
     /// The checked parts.
     pub parts: SceneParts,
     /// What the importer skipped, located like errors.
-    pub warnings: Vec<SceneError>,
+    pub warnings: Vec<FieldError>,
 }
 
 /// Loads a scene file of any supported format, chosen by the
@@ -88,7 +83,7 @@ pub fn load_file(path: &Path) -> Result<Loaded> {
         }
         Some("gltf" | "glb") => gltf_scene::load(path),
         Some("xml") => mitsuba::load(path),
-        _ => Err(SceneError::new(
+        _ => Err(FieldError::new(
             path,
             "document",
             "unsupported scene format: expected a .toml, .gltf, .glb or .xml file",
@@ -100,20 +95,8 @@ pub fn load_file(path: &Path) -> Result<Loaded> {
 /// Builds checked parts from the text of a scene file; `file` names it in
 /// errors and its directory resolves relative paths.
 pub fn parts_from_str(text: &str, file: &Path) -> Result<SceneParts> {
-    let (desc, locator) = parse_toml::<SceneDesc>(text, file)?;
+    let (desc, locator) = fields::parse::<SceneDesc>(text, file)?;
     parts_from_desc(&desc, file, &locator, "")
-}
-
-/// Parses `text` as TOML into `T` (any serde type, such as a problem file
-/// that embeds a [`SceneDesc`]), returning it with a [`Locator`] for later
-/// semantic errors. Syntax and type errors are located [`SceneError`]s.
-pub fn parse_toml<T: DeserializeOwned>(text: &str, file: &Path) -> Result<(T, Locator)> {
-    let root = toml::de::DeTable::parse(text)
-        .map_err(|e| Error::from(locate::syntax_error(file, text, &e)))?;
-    let locator = Locator::new(text, &root);
-    let value = T::deserialize(toml::de::Deserializer::from(root))
-        .map_err(|e| Error::from(locator.serde_error(file, &e)))?;
-    Ok((value, locator))
 }
 
 /// Checks `desc` and builds its parts. `file` and `locator` locate errors;
@@ -125,5 +108,5 @@ pub fn parts_from_desc(
     locator: &Locator,
     prefix: &str,
 ) -> Result<SceneParts> {
-    build::parts(desc, &check::Ctx::new(file, locator, prefix))
+    build::parts(desc, &Fields::new(file, locator, prefix))
 }

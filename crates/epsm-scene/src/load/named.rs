@@ -13,8 +13,8 @@ use std::ffi::OsString;
 use std::hash::{Hash, Hasher};
 use std::path::{Path, PathBuf};
 
-use super::check::Ctx;
 use crate::error::Result;
+use crate::fields::Fields;
 
 /// A file named by a field of a scene. Two are equal when they read the
 /// same file (symlinks resolved) as the same format with references
@@ -32,7 +32,7 @@ pub(crate) struct NamedFile {
 impl NamedFile {
     /// The file at `path` (resolved from field `field`); an error at `field`
     /// when it or its directory does not exist.
-    pub fn new(path: PathBuf, field: &str, ctx: &Ctx) -> Result<Self> {
+    pub fn new(path: PathBuf, field: &str, ctx: &Fields) -> Result<Self> {
         let cannot_open =
             |e: std::io::Error| ctx.err(field, format!("cannot open {}: {e}", path.display()));
         let target = path.canonicalize().map_err(cannot_open)?;

@@ -7,10 +7,10 @@ use std::sync::Arc;
 
 use glam::{DAffine3, DMat3, DQuat, DVec3};
 
-use super::check::Ctx;
 use super::named::NamedFile;
 use crate::desc::{ObjectDesc, ScaleDesc, ShapeKind};
 use crate::error::Result;
+use crate::fields::Fields;
 use epsm_render::materials::Material;
 use epsm_render::scene::{Mesh, Object, Surface};
 
@@ -27,13 +27,13 @@ enum Source {
 
 /// Builds objects, sharing meshes between objects that use the same source.
 pub struct Objects<'a> {
-    ctx: &'a Ctx<'a>,
+    ctx: &'a Fields<'a>,
     meshes: HashMap<(Source, bool), Arc<Mesh>>,
 }
 
 impl<'a> Objects<'a> {
     /// An empty builder for the file of `ctx`.
-    pub fn new(ctx: &'a Ctx<'a>) -> Self {
+    pub fn new(ctx: &'a Fields<'a>) -> Self {
         Self {
             ctx,
             meshes: HashMap::new(),

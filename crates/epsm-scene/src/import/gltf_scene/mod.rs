@@ -33,11 +33,11 @@ use glam::{DAffine3, DVec3, Vec3};
 pub use material::SMOOTH_ALPHA;
 
 use super::gltf::{File, Placed, open, primitive, walk};
-use crate::error::{Error, Result, SceneError};
+use crate::error::{Error, FieldError, Result};
+use crate::fields::Fields;
+use crate::fields::Locator;
 use crate::load::Loaded;
-use crate::load::Locator;
 use crate::load::build::{View, checked_camera};
-use crate::load::check::Ctx;
 use epsm_render::camera::Camera;
 use epsm_render::lights::{Background, PointLight};
 use epsm_render::materials::Material;
@@ -58,7 +58,7 @@ pub fn load(path: &Path) -> Result<Loaded> {
 pub fn from_slice(bytes: &[u8], file: &Path) -> Result<Loaded> {
     let gltf = open(bytes, file)?;
     let locator = Locator::default();
-    let ctx = Ctx::new(file, &locator, "");
+    let ctx = Fields::new(file, &locator, "");
     let placed = walk(&gltf.doc, file)?;
     let mut importer = Importer {
         ctx: &ctx,
@@ -101,8 +101,8 @@ pub fn from_slice(bytes: &[u8], file: &Path) -> Result<Loaded> {
 /// The state of one import: materials so far, with the emission each gives
 /// its objects, and warnings.
 struct Importer<'a> {
-    ctx: &'a Ctx<'a>,
-    warnings: Vec<SceneError>,
+    ctx: &'a Fields<'a>,
+    warnings: Vec<FieldError>,
     materials: Vec<Material>,
     emission: Vec<Option<Vec3>>,
 }
@@ -242,14 +242,14 @@ impl Importer<'_> {
         mirror: bool,
     ) -> Result<Mesh> {
         let file = self.ctx.file;
-        let mut mesh = primitive(prim, buffers).map_err(|msg| SceneError::new(file, field, msg))?;
+        let mut mesh = primitive(prim, buffers).map_err(|msg| FieldError::new(file, field, msg))?;
         if mirror {
             mesh.indices.iter_mut().for_each(|t| t.swap(1, 2));
         }
         super::validate(&mesh, file).map_err(|e| match e {
-            Error::Scene(mut s) => {
+            Error::Field(mut s) => {
                 s.field = format!("{field}.{}", s.field);
-                Error::Scene(s)
+                Error::Field(s)
             }
             other => other,
         })?;

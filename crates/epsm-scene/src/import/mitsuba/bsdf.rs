@@ -26,8 +26,8 @@
 use std::collections::HashMap;
 
 use super::parse::{Element, finish};
-use crate::error::{Result, SceneError};
-use crate::load::check::Ctx;
+use crate::error::{FieldError, Result};
+use crate::fields::Fields;
 use epsm_render::materials::{
     Bsdf, Conductor, Dielectric, Diffuse, Material, RoughConductor, Texture,
 };
@@ -69,8 +69,8 @@ pub(crate) fn material(
     el: &Element,
     name: String,
     defs: &Definitions,
-    ctx: &Ctx,
-    warnings: &mut Vec<SceneError>,
+    ctx: &Fields,
+    warnings: &mut Vec<FieldError>,
 ) -> Result<Material> {
     let mut stack = Vec::new();
     let (bsdf, two_sided) = resolve(el, defs, &mut stack, ctx, warnings)?;
@@ -87,7 +87,7 @@ pub(crate) fn target<'a>(
     el: &'a Element,
     defs: &Definitions<'a>,
     stack: &mut Vec<String>,
-    ctx: &Ctx,
+    ctx: &Fields,
 ) -> Result<&'a Element> {
     if el.tag != "ref" {
         return Ok(el);
@@ -110,8 +110,8 @@ fn resolve(
     el: &Element,
     defs: &Definitions,
     stack: &mut Vec<String>,
-    ctx: &Ctx,
-    warnings: &mut Vec<SceneError>,
+    ctx: &Fields,
+    warnings: &mut Vec<FieldError>,
 ) -> Result<(Bsdf, bool)> {
     let el = target(el, defs, stack, ctx)?;
     if el.tag != "bsdf" {
@@ -169,7 +169,7 @@ fn resolve(
 }
 
 /// A conductor's tint: the named metal's reflectance × `specular_reflectance`.
-fn tint(el: &Element, ctx: &Ctx) -> Result<glam::Vec3> {
+fn tint(el: &Element, ctx: &Fields) -> Result<glam::Vec3> {
     let field = format!("{}.material", el.path);
     let metal = el.string(ctx, "material")?.unwrap_or("none");
     let Some((_, base)) = METALS.iter().find(|(n, _)| *n == metal) else {
@@ -181,11 +181,11 @@ fn tint(el: &Element, ctx: &Ctx) -> Result<glam::Vec3> {
     };
     let scale = el.rgb(ctx, "specular_reflectance")?.unwrap_or([1.0; 3]);
     let tint = [0, 1, 2].map(|i| base[i] * scale[i]);
-    ctx.color(&format!("{}.specular_reflectance", el.path), tint, 1.0)
+    Ok(ctx.color(&format!("{}.specular_reflectance", el.path), tint, 1.0)?)
 }
 
 /// An index of refraction given as a number or a name of [`IORS`].
-fn ior(el: &Element, key: &str, default: f64, ctx: &Ctx) -> Result<f64> {
+fn ior(el: &Element, key: &str, default: f64, ctx: &Fields) -> Result<f64> {
     let field = format!("{}.{key}", el.path);
     let Some(p) = el.prop(key) else {
         return Ok(default);

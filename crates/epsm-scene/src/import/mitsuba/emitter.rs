@@ -24,9 +24,9 @@ use glam::DVec3;
 
 use super::parse::{Element, finish};
 use super::transform::transform;
-use crate::error::{Result, SceneError};
+use crate::error::{FieldError, Result};
+use crate::fields::Fields;
 use crate::load::build::{ImageCache, image};
-use crate::load::check::Ctx;
 use epsm_render::lights::{Background, EnvMap, PointLight};
 
 /// What one top-level emitter becomes.
@@ -42,8 +42,8 @@ pub(crate) fn emitter(
     el: &Element,
     name: String,
     images: &mut ImageCache,
-    ctx: &Ctx,
-    warnings: &mut Vec<SceneError>,
+    ctx: &Fields,
+    warnings: &mut Vec<FieldError>,
 ) -> Result<Emitter> {
     let field = |key: &str| format!("{}.{key}", el.path);
     let out = match el.kind(ctx)? {

@@ -38,10 +38,10 @@ use glam::Vec3;
 use self::bsdf::{Definitions, target};
 use self::emitter::Emitter;
 use self::parse::{Element, finish};
-use crate::error::{Result, SceneError};
+use crate::error::{FieldError, Result};
+use crate::fields::Fields;
 use crate::load::Loaded;
 use crate::load::build::ImageCache;
-use crate::load::check::Ctx;
 use epsm_render::lights::Background;
 use epsm_render::materials::{Bsdf, Diffuse, Material, Texture};
 use epsm_render::scene::{Object, SceneParts};
@@ -55,7 +55,7 @@ pub fn load(path: &Path) -> Result<Loaded> {
 /// errors and its directory resolves mesh and image files.
 pub fn from_str(text: &str, file: &Path) -> Result<Loaded> {
     let doc = parse::parse(text, file)?;
-    let ctx = Ctx::new(file, &doc.locator, "");
+    let ctx = Fields::new(file, &doc.locator, "");
     let root = &doc.root;
     let mut warnings = Vec::new();
     let sensors: Vec<&Element> = root.tagged("sensor").collect();
@@ -172,8 +172,8 @@ impl Materials {
         el: &Element,
         object: &str,
         defs: &Definitions,
-        ctx: &Ctx,
-        warnings: &mut Vec<SceneError>,
+        ctx: &Fields,
+        warnings: &mut Vec<FieldError>,
     ) -> Result<u32> {
         let nested: Vec<&Element> = el.tagged("bsdf").chain(el.tagged("ref")).collect();
         match nested.as_slice() {
@@ -216,8 +216,8 @@ impl Materials {
         id: &str,
         el: &Element,
         defs: &Definitions,
-        ctx: &Ctx,
-        warnings: &mut Vec<SceneError>,
+        ctx: &Fields,
+        warnings: &mut Vec<FieldError>,
     ) -> Result<u32> {
         self.add(id, || {
             bsdf::material(el, id.to_owned(), defs, ctx, warnings)

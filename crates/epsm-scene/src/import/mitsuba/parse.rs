@@ -24,9 +24,9 @@ use std::collections::HashMap;
 use std::ops::Range;
 use std::path::Path;
 
-use crate::error::{Error, Result, SceneError};
-use crate::load::Locator;
-use crate::load::check::Ctx;
+use crate::error::{Error, FieldError, Result};
+use crate::fields::Fields;
+use crate::fields::Locator;
 
 /// Deepest accepted element nesting (real scenes use fewer than 10 levels).
 pub const MAX_DEPTH: usize = 64;
@@ -56,7 +56,7 @@ pub(crate) struct Document {
 /// `<scene>`, nesting deeper than [`MAX_DEPTH`]) name `file` and the line.
 pub(crate) fn parse(text: &str, file: &Path) -> Result<Document> {
     let doc = roxmltree::Document::parse(text).map_err(|e| {
-        SceneError::new(file, "document", format!("malformed XML: {e}"))
+        FieldError::new(file, "document", format!("malformed XML: {e}"))
             .at_line(e.pos().row as usize)
     })?;
     let line = |node: roxmltree::Node| doc.text_pos_at(node.range().start).row as usize;
@@ -66,7 +66,7 @@ pub(crate) fn parse(text: &str, file: &Path) -> Result<Document> {
             "expected a <scene> root element, found <{}>",
             root.tag_name().name()
         );
-        return Err(SceneError::new(file, "document", msg)
+        return Err(FieldError::new(file, "document", msg)
             .at_line(line(root))
             .into());
     }
@@ -74,7 +74,7 @@ pub(crate) fn parse(text: &str, file: &Path) -> Result<Document> {
     for d in root.children().filter(|n| n.has_tag_name("default")) {
         let (Some(name), Some(value)) = (d.attribute("name"), d.attribute("value")) else {
             let msg = "expected name and value attributes";
-            return Err(SceneError::new(file, "default", msg)
+            return Err(FieldError::new(file, "default", msg)
                 .at_line(line(d))
                 .into());
         };
@@ -107,7 +107,7 @@ struct Builder<'a, L> {
 impl<L: Fn(roxmltree::Node) -> usize> Builder<'_, L> {
     fn element(&mut self, node: roxmltree::Node, path: String, depth: usize) -> Result<Element> {
         let fail = |msg: String| {
-            Error::from(SceneError::new(self.file, &path, msg).at_line((self.line)(node)))
+            Error::from(FieldError::new(self.file, &path, msg).at_line((self.line)(node)))
         };
         if depth > MAX_DEPTH {
             return Err(fail(format!(
@@ -131,7 +131,7 @@ impl<L: Fn(roxmltree::Node) -> usize> Builder<'_, L> {
                     "duplicate id \"{id}\": the <{first}> at line {at} has it (Mitsuba \
                      requires ids unique across the scene)"
                 );
-                return Err(SceneError::new(self.file, format!("{path}.id"), msg)
+                return Err(FieldError::new(self.file, format!("{path}.id"), msg)
                     .at_line(line)
                     .into());
             }
@@ -212,7 +212,7 @@ impl Element {
     }
 
     /// The plugin type (`type` attribute), or an error naming it as required.
-    pub fn kind(&self, ctx: &Ctx) -> Result<&str> {
+    pub fn kind(&self, ctx: &Fields) -> Result<&str> {
         self.attr("type")
             .ok_or_else(|| ctx.err(&format!("{}.type", self.path), "missing type attribute"))
     }
@@ -238,9 +238,9 @@ impl Element {
 /// element and line for anything else.
 pub(crate) fn finish(
     el: &Element,
-    ctx: &Ctx,
+    ctx: &Fields,
     skippable: &[&str],
-    warnings: &mut Vec<SceneError>,
+    warnings: &mut Vec<FieldError>,
 ) -> Result<()> {
     for c in el.children.iter().filter(|c| !c.used.get()) {
         let name = c.attr("name").unwrap_or(&c.tag);

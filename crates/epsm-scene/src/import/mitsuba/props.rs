@@ -20,12 +20,12 @@
 use glam::DVec3;
 
 use super::parse::Element;
-use crate::error::Result;
-use crate::load::check::Ctx;
+use crate::error::{FieldError, Result};
+use crate::fields::Fields;
 
 impl Element {
     /// Attribute `key` parsed as a list of finite numbers (comma or space separated).
-    pub fn numbers(&self, ctx: &Ctx, key: &str) -> Result<Option<Vec<f64>>> {
+    pub fn numbers(&self, ctx: &Fields, key: &str) -> Result<Option<Vec<f64>>> {
         let Some(text) = self.attr(key) else {
             return Ok(None);
         };
@@ -33,17 +33,17 @@ impl Element {
         let parse = |s: &str| {
             let v = s
                 .parse::<f64>()
-                .map_err(|_| ctx.err(&field, format!("expected a number, found \"{s}\"")))?;
+                .map_err(|_| ctx.located(&field, format!("expected a number, found \"{s}\"")))?;
             ctx.finite(&field, v)
         };
         let words = text
             .split([',', ' ', '\t', '\n', '\r'])
             .filter(|s| !s.is_empty());
-        Ok(Some(words.map(parse).collect::<Result<_>>()?))
+        Ok(Some(words.map(parse).collect::<Result<_, FieldError>>()?))
     }
 
     /// The property `name`, checking its tag is one of `tags`.
-    fn typed(&self, ctx: &Ctx, name: &str, tags: &[&str]) -> Result<Option<&Element>> {
+    fn typed(&self, ctx: &Fields, name: &str, tags: &[&str]) -> Result<Option<&Element>> {
         match self.prop(name) {
             Some(p) if !tags.contains(&p.tag.as_str()) => {
                 let msg = format!("expected <{}>, found <{}>", tags.join("> or <"), p.tag);
@@ -54,13 +54,13 @@ impl Element {
     }
 
     /// The `value` attribute of a property, required.
-    fn value<'a>(&'a self, ctx: &Ctx) -> Result<&'a str> {
+    fn value<'a>(&'a self, ctx: &Fields) -> Result<&'a str> {
         self.attr("value")
             .ok_or_else(|| ctx.err(&format!("{}.value", self.path), "missing value attribute"))
     }
 
     /// `<float name=…>` (an `<integer>` is accepted too), finite.
-    pub fn float(&self, ctx: &Ctx, name: &str) -> Result<Option<f64>> {
+    pub fn float(&self, ctx: &Fields, name: &str) -> Result<Option<f64>> {
         let Some(p) = self.typed(ctx, name, &["float", "integer"])? else {
             return Ok(None);
         };
@@ -72,7 +72,7 @@ impl Element {
     }
 
     /// `<integer name=…>`.
-    pub fn integer(&self, ctx: &Ctx, name: &str) -> Result<Option<i64>> {
+    pub fn integer(&self, ctx: &Fields, name: &str) -> Result<Option<i64>> {
         let Some(p) = self.typed(ctx, name, &["integer"])? else {
             return Ok(None);
         };
@@ -85,7 +85,7 @@ impl Element {
     }
 
     /// `<boolean name=…>` (`true` or `false`).
-    pub fn boolean(&self, ctx: &Ctx, name: &str) -> Result<Option<bool>> {
+    pub fn boolean(&self, ctx: &Fields, name: &str) -> Result<Option<bool>> {
         let Some(p) = self.typed(ctx, name, &["boolean"])? else {
             return Ok(None);
         };
@@ -100,7 +100,7 @@ impl Element {
     }
 
     /// `<string name=…>`.
-    pub fn string(&self, ctx: &Ctx, name: &str) -> Result<Option<&str>> {
+    pub fn string(&self, ctx: &Fields, name: &str) -> Result<Option<&str>> {
         match self.typed(ctx, name, &["string"])? {
             Some(p) => p.value(ctx).map(Some),
             None => Ok(None),
@@ -109,7 +109,7 @@ impl Element {
 
     /// `<rgb name=…>` (three values, or one for grey) or a uniform
     /// `<spectrum name=… value="v"/>`.
-    pub fn rgb(&self, ctx: &Ctx, name: &str) -> Result<Option<[f64; 3]>> {
+    pub fn rgb(&self, ctx: &Fields, name: &str) -> Result<Option<[f64; 3]>> {
         let Some(p) = self.typed(ctx, name, &["rgb", "spectrum", "float"])? else {
             return Ok(None);
         };
@@ -125,7 +125,7 @@ impl Element {
     }
 
     /// `<point name=…>` or `<vector name=…>` (`value="x, y, z"` or `x`/`y`/`z` attributes).
-    pub fn point(&self, ctx: &Ctx, name: &str) -> Result<Option<DVec3>> {
+    pub fn point(&self, ctx: &Fields, name: &str) -> Result<Option<DVec3>> {
         match self.typed(ctx, name, &["point", "vector"])? {
             Some(p) => p.xyz(ctx, 0.0).map(Some),
             None => Ok(None),
@@ -134,7 +134,7 @@ impl Element {
 
     /// This element's vector: its `value` list, or its `x`, `y`, `z`
     /// attributes (each `default` when absent).
-    pub fn xyz(&self, ctx: &Ctx, default: f64) -> Result<DVec3> {
+    pub fn xyz(&self, ctx: &Fields, default: f64) -> Result<DVec3> {
         if let Some(v) = self.numbers(ctx, "value")? {
             return match *v.as_slice() {
                 [s] => Ok(DVec3::splat(s)),

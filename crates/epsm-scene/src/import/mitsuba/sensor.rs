@@ -28,9 +28,9 @@ use glam::DAffine3;
 
 use super::parse::{Element, finish};
 use super::transform::transform;
-use crate::error::{Result, SceneError};
+use crate::error::{FieldError, Result};
+use crate::fields::Fields;
 use crate::load::build::{MAX_DEPTH, View, checked_camera};
-use crate::load::check::Ctx;
 use epsm_render::camera::Camera;
 use epsm_render::scene::RenderSettings;
 
@@ -38,8 +38,8 @@ use epsm_render::scene::RenderSettings;
 pub(crate) fn sensor(
     sensor: &Element,
     integrator: Option<&Element>,
-    ctx: &Ctx,
-    warnings: &mut Vec<SceneError>,
+    ctx: &Fields,
+    warnings: &mut Vec<FieldError>,
 ) -> Result<(Camera, RenderSettings)> {
     let field = |el: &Element, key: &str| format!("{}.{key}", el.path);
     if sensor.kind(ctx)? != "perspective" {
@@ -164,8 +164,8 @@ pub(crate) fn sensor(
 fn depths(
     el: &Element,
     settings: &mut RenderSettings,
-    ctx: &Ctx,
-    warnings: &mut Vec<SceneError>,
+    ctx: &Fields,
+    warnings: &mut Vec<FieldError>,
 ) -> Result<()> {
     let kind = el.kind(ctx)?;
     if kind != "path" {

@@ -30,9 +30,9 @@ use glam::{DAffine3, DVec3, Vec3};
 use super::parse::{Element, finish};
 use super::transform::transform;
 use crate::desc::ShapeKind;
-use crate::error::{Result, SceneError};
+use crate::error::{FieldError, Result};
+use crate::fields::Fields;
 use crate::import::load_mesh;
-use crate::load::check::Ctx;
 use crate::load::named::NamedFile;
 use crate::load::object::flipped;
 use crate::shapes;
@@ -73,8 +73,8 @@ impl Shapes {
     pub fn shape(
         &mut self,
         el: &Element,
-        ctx: &Ctx,
-        warnings: &mut Vec<SceneError>,
+        ctx: &Fields,
+        warnings: &mut Vec<FieldError>,
     ) -> Result<Shape> {
         let field = |key: &str| format!("{}.{key}", el.path);
         let mut placement = DAffine3::IDENTITY;
@@ -152,7 +152,7 @@ impl Shapes {
     }
 
     /// The mesh of `source`, flipped when asked, from the cache when possible.
-    fn mesh(&mut self, source: Source, flip: bool, field: &str, ctx: &Ctx) -> Result<Arc<Mesh>> {
+    fn mesh(&mut self, source: Source, flip: bool, field: &str, ctx: &Fields) -> Result<Arc<Mesh>> {
         if let Some(mesh) = self.meshes.get(&(source.clone(), flip)) {
             return Ok(mesh.clone());
         }
@@ -177,7 +177,7 @@ impl Shapes {
 }
 
 /// The radiance of an `<emitter type="area">` nested in a shape.
-fn area(el: &Element, ctx: &Ctx, warnings: &mut Vec<SceneError>) -> Result<Vec3> {
+fn area(el: &Element, ctx: &Fields, warnings: &mut Vec<FieldError>) -> Result<Vec3> {
     let kind = el.kind(ctx)?;
     if kind != "area" {
         let msg = format!("a shape's emitter must be of type area, found \"{kind}\"");

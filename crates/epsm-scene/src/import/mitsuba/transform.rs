@@ -22,10 +22,10 @@ use glam::{DAffine3, DMat3, DMat4, DVec3};
 
 use super::parse::Element;
 use crate::error::Result;
-use crate::load::check::Ctx;
+use crate::fields::Fields;
 
 /// The affine map of a `<transform>` element; errors name the child and line.
-pub(crate) fn transform(el: &Element, ctx: &Ctx) -> Result<DAffine3> {
+pub(crate) fn transform(el: &Element, ctx: &Fields) -> Result<DAffine3> {
     if el.tag != "transform" {
         return Err(ctx.err(
             &el.path,
@@ -67,7 +67,7 @@ pub(crate) fn transform(el: &Element, ctx: &Ctx) -> Result<DAffine3> {
 }
 
 /// `<matrix value="…16 numbers, row-major…"/>`.
-fn matrix(op: &Element, ctx: &Ctx) -> Result<DAffine3> {
+fn matrix(op: &Element, ctx: &Fields) -> Result<DAffine3> {
     let field = format!("{}.value", op.path);
     let values = op.numbers(ctx, "value")?.unwrap_or_default();
     let Ok(rows) = <[f64; 16]>::try_from(values.as_slice()) else {
@@ -84,7 +84,7 @@ fn matrix(op: &Element, ctx: &Ctx) -> Result<DAffine3> {
 }
 
 /// `<lookat origin=… target=… up=…/>`.
-fn look_at(op: &Element, ctx: &Ctx) -> Result<DAffine3> {
+fn look_at(op: &Element, ctx: &Fields) -> Result<DAffine3> {
     let vec = |key: &str| -> Result<DVec3> {
         let field = format!("{}.{key}", op.path);
         match op.numbers(ctx, key)?.as_deref() {
@@ -125,7 +125,7 @@ mod tests {
         );
         let file = Path::new("t.xml");
         let doc = parse(&text, file)?;
-        let ctx = Ctx {
+        let ctx = Fields {
             file,
             base: Default::default(),
             locator: &doc.locator,

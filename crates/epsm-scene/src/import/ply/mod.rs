@@ -27,7 +27,7 @@ use std::path::Path;
 use glam::{Vec2, Vec3};
 
 use self::header::{Element, Format, Scalar, header};
-use crate::error::{Error, Result, SceneError};
+use crate::error::{Error, FieldError, Result};
 use epsm_render::scene::Mesh;
 
 /// Reads the PLY file at `path` into one mesh (not yet validated).
@@ -38,7 +38,7 @@ pub fn load(path: &Path) -> Result<Mesh> {
 /// Parses the bytes of a PLY file; `file` names it in errors.
 pub fn parse(bytes: &[u8], file: &Path) -> Result<Mesh> {
     let err = |field: &str, line: Option<usize>, msg: String| {
-        let e = SceneError::new(file, field, msg);
+        let e = FieldError::new(file, field, msg);
         Error::from(match line {
             Some(l) => e.at_line(l),
             None => e,

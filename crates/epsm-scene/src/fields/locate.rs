@@ -11,7 +11,7 @@ use std::path::Path;
 use toml::Spanned;
 use toml::de::{DeTable, DeValue};
 
-use crate::error::SceneError;
+use crate::error::FieldError;
 
 /// One key or array element of the document.
 #[derive(Clone, Debug)]
@@ -122,7 +122,7 @@ impl Locator {
     }
 
     /// A located error for a failed deserialization of this document.
-    pub fn serde_error(&self, file: &Path, err: &toml::de::Error) -> SceneError {
+    pub fn serde_error(&self, file: &Path, err: &toml::de::Error) -> FieldError {
         let span = err.span();
         let mut field = span
             .as_ref()
@@ -136,7 +136,7 @@ impl Locator {
         {
             field = join(&field, name);
         }
-        let error = SceneError::new(file, document_if_empty(field), message);
+        let error = FieldError::new(file, document_if_empty(field), message);
         match span {
             Some(s) => error.at_line(self.line_of_offset(s.start)),
             None => error,
@@ -145,10 +145,10 @@ impl Locator {
 }
 
 /// A located error for a TOML syntax error in `text`.
-pub fn syntax_error(file: &Path, text: &str, err: &toml::de::Error) -> SceneError {
+pub fn syntax_error(file: &Path, text: &str, err: &toml::de::Error) -> FieldError {
     let message = err.message().to_owned();
     let Some(span) = err.span() else {
-        return SceneError::new(file, "document", message);
+        return FieldError::new(file, "document", message);
     };
     let starts = line_starts(text);
     let line = starts.partition_point(|&s| s <= span.start).max(1);
@@ -159,7 +159,7 @@ pub fn syntax_error(file: &Path, text: &str, err: &toml::de::Error) -> SceneErro
         .find(|&l| !is_blank(lines[l - 1]))
         .unwrap_or(line);
     let field = field_at_line(text, line);
-    SceneError::new(file, document_if_empty(field), message).at_line(line)
+    FieldError::new(file, document_if_empty(field), message).at_line(line)
 }
 
 /// The dotted path of whatever line `line` (1-based) defines: the last table

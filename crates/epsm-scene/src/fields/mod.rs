@@ -1,21 +1,60 @@
-//! Value checks shared by every section of the loader: each takes the dotted
-//! field name, checks one documented range and returns the value in the
-//! renderer's types, or a located [`SceneError`] saying what was expected.
+//! Located TOML documents: the API for any file that is TOML with dotted
+//! fields, scene files and the files that embed a scene (problem files).
+//!
+//! 1. [`parse`] reads the text into any serde type, with unknown keys
+//!    rejected by the type, and returns a [`Locator`] (field → line) beside
+//!    it; syntax and type errors come back located.
+//! 2. [`Fields`] checks values one dotted field at a time (`finite`, `check`,
+//!    `within`, `count`, colours, names) and turns a message into a
+//!    [`FieldError`] naming the file, the line and the field.
+//!
+//! ```
+//! use std::path::Path;
+//! use epsm_scene::fields::{Fields, parse};
+//!
+//! #[derive(serde::Deserialize)]
+//! struct Settings {
+//!     iterations: u32,
+//! }
+//!
+//! let file = Path::new("settings.toml");
+//! let (settings, locator) = parse::<Settings>("iterations = 0\n", file)?;
+//! let fields = Fields::new(file, &locator, "");
+//! let err = fields.count("iterations", settings.iterations, 1, 100).unwrap_err();
+//! assert_eq!(err.to_string(), "settings.toml:1: iterations: expected an integer in [1, 100], found 0");
+//! # Ok::<(), epsm_scene::FieldError>(())
+//! ```
+
+mod locate;
 
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 
 use glam::{DVec3, Vec3};
+use serde::de::DeserializeOwned;
 
-use super::locate::Locator;
-use crate::error::{Error, SceneError, shown};
+use crate::error::{Error, FieldError, shown};
+pub use locate::Locator;
+
+/// Parses `text` as TOML into `T` (any serde type, such as a problem file
+/// that embeds a [`SceneDesc`](crate::desc::SceneDesc)), returning it with a
+/// [`Locator`] for later checks. `file` names the file in errors. Syntax and
+/// type errors are located [`FieldError`]s.
+pub fn parse<T: DeserializeOwned>(text: &str, file: &Path) -> Result<(T, Locator), FieldError> {
+    let root = toml::de::DeTable::parse(text).map_err(|e| locate::syntax_error(file, text, &e))?;
+    let locator = Locator::new(text, &root);
+    let value = T::deserialize(toml::de::Deserializer::from(root))
+        .map_err(|e| locator.serde_error(file, &e))?;
+    Ok((value, locator))
+}
 
 /// Smallest accepted GGX roughness `alpha` (smoother surfaces are conductors).
 pub const MIN_ALPHA: f64 = 1e-4;
 
-/// What errors need to name a field: the file, its locator, and the prefix of
-/// the scene inside the file (empty unless embedded in a larger file).
-pub struct Ctx<'a> {
+/// The checks of one file's fields: the file, its locator, and the dotted
+/// prefix of the checked table inside the file (empty for the whole file,
+/// `scene` for a problem file's `[scene]` table).
+pub struct Fields<'a> {
     /// The file, as given.
     pub file: &'a Path,
     /// Where relative paths resolve: the file's directory.
@@ -26,7 +65,7 @@ pub struct Ctx<'a> {
     pub prefix: &'a str,
 }
 
-impl<'a> Ctx<'a> {
+impl<'a> Fields<'a> {
     /// The context of `file` (relative paths resolve against its directory),
     /// with its fields under the dotted `prefix` (`""` for a whole file).
     pub fn new(file: &'a Path, locator: &'a Locator, prefix: &'a str) -> Self {
@@ -53,10 +92,10 @@ impl<'a> Ctx<'a> {
     }
 
     /// The located report of `message` at `field` (an error or a warning).
-    pub fn located(&self, field: &str, message: impl Into<String>) -> SceneError {
+    pub fn located(&self, field: &str, message: impl Into<String>) -> FieldError {
         let path = self.path(field);
         let line = self.locator.line(&path);
-        let mut e = SceneError::new(self.file, path, message);
+        let mut e = FieldError::new(self.file, path, message);
         e.line = line;
         e
     }
@@ -67,9 +106,9 @@ impl<'a> Ctx<'a> {
     }
 
     /// A finite number that stays finite in the renderer's `f32`.
-    pub fn finite(&self, field: &str, v: f64) -> Result<f64, Error> {
+    pub fn finite(&self, field: &str, v: f64) -> Result<f64, FieldError> {
         if !v.is_finite() {
-            Err(self.err(
+            Err(self.located(
                 field,
                 format!("expected a finite number, found {}", shown(v)),
             ))
@@ -79,7 +118,7 @@ impl<'a> Ctx<'a> {
                 f32::MAX,
                 shown(v)
             );
-            Err(self.err(field, msg))
+            Err(self.located(field, msg))
         } else {
             Ok(v)
         }
@@ -87,22 +126,29 @@ impl<'a> Ctx<'a> {
 
     /// A finite number for which `ok` (the caller's range test of it) holds;
     /// `what` names the range in the message.
-    pub fn check(&self, field: &str, v: f64, ok: bool, what: &str) -> Result<f64, Error> {
+    pub fn check(&self, field: &str, v: f64, ok: bool, what: &str) -> Result<f64, FieldError> {
         let v = self.finite(field, v)?;
         if ok {
             Ok(v)
         } else {
-            Err(self.err(field, format!("expected {what}, found {}", shown(v))))
+            Err(self.located(field, format!("expected {what}, found {}", shown(v))))
         }
     }
 
     /// A number in `[lo, hi]`; `what` names the range in the message.
-    pub fn within(&self, field: &str, v: f64, lo: f64, hi: f64, what: &str) -> Result<f64, Error> {
+    pub fn within(
+        &self,
+        field: &str,
+        v: f64,
+        lo: f64,
+        hi: f64,
+        what: &str,
+    ) -> Result<f64, FieldError> {
         self.check(field, v, (lo..=hi).contains(&v), what)
     }
 
     /// A vector of finite numbers.
-    pub fn vec3(&self, field: &str, v: [f64; 3]) -> Result<DVec3, Error> {
+    pub fn vec3(&self, field: &str, v: [f64; 3]) -> Result<DVec3, FieldError> {
         for (i, x) in v.into_iter().enumerate() {
             self.finite(&format!("{field}[{i}]"), x)?;
         }
@@ -110,7 +156,7 @@ impl<'a> Ctx<'a> {
     }
 
     /// A linear RGB colour, each channel in `[0, max]`.
-    pub fn color(&self, field: &str, v: [f64; 3], max: f64) -> Result<Vec3, Error> {
+    pub fn color(&self, field: &str, v: [f64; 3], max: f64) -> Result<Vec3, FieldError> {
         let what = if max.is_finite() {
             format!("a value in [0, {max}]")
         } else {
@@ -123,24 +169,24 @@ impl<'a> Ctx<'a> {
     }
 
     /// A GGX roughness `alpha` in `[MIN_ALPHA, 1]`.
-    pub fn alpha(&self, field: &str, v: f64) -> Result<f32, Error> {
+    pub fn alpha(&self, field: &str, v: f64) -> Result<f32, FieldError> {
         let what = format!("a value in [{MIN_ALPHA:e}, 1]");
         Ok(self.within(field, v, MIN_ALPHA, 1.0, &what)? as f32)
     }
 
     /// A (relative) index of refraction, finite and `> 0`.
-    pub fn ior(&self, field: &str, v: f64) -> Result<f32, Error> {
+    pub fn ior(&self, field: &str, v: f64) -> Result<f32, FieldError> {
         Ok(self.check(field, v, v > 0.0, "a value > 0")? as f32)
     }
 
     /// A count in `[lo, hi]`.
-    pub fn count(&self, field: &str, v: u32, lo: u32, hi: u32) -> Result<u32, Error> {
+    pub fn count(&self, field: &str, v: u32, lo: u32, hi: u32) -> Result<u32, FieldError> {
         if (lo..=hi).contains(&v) {
             Ok(v)
         } else if hi == u32::MAX {
-            Err(self.err(field, format!("expected an integer >= {lo}, found {v}")))
+            Err(self.located(field, format!("expected an integer >= {lo}, found {v}")))
         } else {
-            Err(self.err(
+            Err(self.located(
                 field,
                 format!("expected an integer in [{lo}, {hi}], found {v}"),
             ))
@@ -155,12 +201,12 @@ impl<'a> Ctx<'a> {
         name: &'n str,
         seen: &mut HashSet<&'n str>,
         what: &str,
-    ) -> Result<(), Error> {
+    ) -> Result<(), FieldError> {
         if name.trim().is_empty() {
-            return Err(self.err(field, format!("{what} name must not be empty")));
+            return Err(self.located(field, format!("{what} name must not be empty")));
         }
         if !seen.insert(name) {
-            return Err(self.err(field, format!("duplicate {what} name \"{name}\"")));
+            return Err(self.located(field, format!("duplicate {what} name \"{name}\"")));
         }
         Ok(())
     }
