@@ -60,7 +60,7 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use crate::blocks::{Clustered, Support};
+use crate::clusters::{Clustered, Support};
 use crate::cost::{check_spread, diameter_sq, sq_dist_f64};
 use crate::error::OtError;
 use crate::plan::{OtResult, PhaseTimes, SolveStats};

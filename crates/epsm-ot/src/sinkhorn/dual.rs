@@ -11,7 +11,7 @@
 //!    once per scale: refreshing it before every update gave the same plans
 //!    and cost 4 % more time at n = 16384), each point streaming only the
 //!    kept blocks that its own bound on `c_ij − f_i − g_j` keeps (`pass::Cut`,
-//!    `blocks::PointCut`: 36 % fewer pairs at n = 16384, 37 % at 65536),
+//!    `clusters::PointCut`: 36 % fewer pairs at n = 16384, 37 % at 65536),
 //!    with over-relaxed updates (ω = `annealing_overrelaxation`). A scale
 //!    opens with a target update at its ε whose pass also sums the plan per
 //!    block pair, followed by the two-grid correction of `coarse` (exact
@@ -44,7 +44,7 @@ use super::SinkhornSettings;
 use super::anderson::{Anderson, Guarded};
 use super::coarse;
 use super::pass::{Cut, Level, coarse_cloud, softmin, softmin_blocks};
-use crate::blocks::{Clustered, Support, fit_potentials};
+use crate::clusters::{Clustered, Support, fit_potentials};
 use crate::plan::{PhaseTimes, SolveStats};
 
 /// Dual potentials of one entropic problem, in the clusterings' orders.

@@ -73,7 +73,7 @@ mod pass;
 
 use std::sync::LazyLock;
 
-use crate::blocks::Clustered;
+use crate::clusters::Clustered;
 use crate::cost::{check_spread, diameter_sq};
 use crate::error::{F32_RESOLUTION, OtError};
 use crate::exact::MAX_DIAMETER_SQ;

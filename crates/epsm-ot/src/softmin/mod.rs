@@ -15,38 +15,19 @@
 //! target range instead of one per row. The paths compute the same operations in the same
 //! order (no reassociation, no FMA contraction), so they agree to rounding.
 
+mod body;
+mod exp;
+
 use std::ops::Range;
 
+use crate::cpu::{Simd, simd};
 use crate::points::{DIM, Point};
+use body::{Scratch, block_sums, gathered_sum, push_range_moments};
+pub(crate) use exp::exp_nonpositive;
 
 /// Targets processed per block of a row.
 pub(crate) const BLOCK: usize = 256;
 const LANES: usize = 16;
-
-/// `exp(x)` for `x ≤ 0` (including `−∞`), relative error below 5e-6 (it grows with |x| through the rounding of `x log2 e`), zero below −87.
-///
-/// Cody–Waite style: `2^t` with `t = x log2 e` split into the nearest integer
-/// `n` (by the 1.5·2²³ rounding trick, so no `floor` call is needed) and a
-/// fraction in `[−½, ½]` handled by Cephes' `exp2f` polynomial; `2^n` is built
-/// in the exponent bits. Every step is branch-free so loops over it vectorise.
-#[inline(always)]
-pub(crate) fn exp_nonpositive(x: f32) -> f32 {
-    const MAGIC: f32 = 12_582_912.0;
-    let underflow = x < -87.0;
-    let t = if underflow { -87.0 } else { x } * std::f32::consts::LOG2_E;
-    let r = t + MAGIC;
-    let n = r - MAGIC;
-    let f = t - n;
-    let p = 1.535_336_2e-4_f32;
-    let p = p * f + 1.339_887_4e-3;
-    let p = p * f + 9.618_437e-3;
-    let p = p * f + 5.550_332_5e-2;
-    let p = p * f + 2.402_264_8e-1;
-    let p = p * f + 6.931_472e-1;
-    let p = p * f + 1.0;
-    let scale = f32::from_bits(r.to_bits().wrapping_add(127) << 23);
-    if underflow { 0.0 } else { p * scale }
-}
 
 /// Running state of one streamed row: log-sum-exp and optional weighted moments.
 #[derive(Debug, Clone, Copy)]
@@ -182,36 +163,6 @@ fn stream<const MOMENTS: bool>(
     }
 }
 
-/// The widest instruction set the running CPU supports among those our SIMD bodies are compiled for.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum Simd {
-    /// AVX-512 F, BW, DQ and VL (16 `f32` lanes).
-    Avx512,
-    /// AVX2 and FMA (8 `f32` lanes).
-    Avx2,
-    /// Baseline x86-64 (SSE2) or another architecture.
-    Portable,
-}
-
-/// Detects [`Simd`] on the running CPU (the standard library caches the detection).
-pub(crate) fn simd() -> Simd {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::arch::is_x86_feature_detected!("avx512f")
-            && std::arch::is_x86_feature_detected!("avx512bw")
-            && std::arch::is_x86_feature_detected!("avx512dq")
-            && std::arch::is_x86_feature_detected!("avx512vl")
-        {
-            return Simd::Avx512;
-        }
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-        {
-            return Simd::Avx2;
-        }
-    }
-    Simd::Portable
-}
-
 /// [`stream_portable`] compiled for 512-bit AVX-512 registers (selected at run time).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx512bw,avx512dq,avx512vl")]
@@ -271,249 +222,6 @@ fn stream_portable<const MOMENTS: bool>(
         Sink::Blocks(sums) => pairs = block_sums(x, y, lw, g, inv_eps, ranges, sums),
     }
     pairs
-}
-
-/// Scores `lw_j + (g_j − c(x, y_j))·inv_eps` of the targets `range` into `out` (as long as
-/// `range`) and, if `COSTS`, the costs `c(x, y_j)` into `costs` (as long as `range`; unused
-/// otherwise).
-#[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn score_into<const COSTS: bool>(
-    x: &Point,
-    y: &[Vec<f32>; DIM],
-    lw: &[f32],
-    g: &[f32],
-    inv_eps: f32,
-    range: Range<usize>,
-    out: &mut [f32],
-    costs: &mut [f32],
-) {
-    let (c0, c1, c2, c3, c4) = (
-        &y[0][range.clone()],
-        &y[1][range.clone()],
-        &y[2][range.clone()],
-        &y[3][range.clone()],
-        &y[4][range.clone()],
-    );
-    let (lws, gs) = (&lw[range.clone()], &g[range]);
-    for k in 0..out.len() {
-        let d0 = x[0] - c0[k];
-        let d1 = x[1] - c1[k];
-        let d2 = x[2] - c2[k];
-        let d3 = x[3] - c3[k];
-        let d4 = x[4] - c4[k];
-        let c = d0 * d0 + d1 * d1 + d2 * d2 + d3 * d3 + d4 * d4;
-        if COSTS {
-            costs[k] = c;
-        }
-        out[k] = lws[k] + (gs[k] - c) * inv_eps;
-    }
-}
-
-/// [`stream_row`] without moments: scores of consecutive ranges fill one
-/// [`BLOCK`]-long buffer, reduced (maximum, exponentials, sum) once it is
-/// full, so many short ranges cost no more per pair than one long one.
-#[inline(always)]
-fn gathered_sum(
-    x: &Point,
-    y: &[Vec<f32>; DIM],
-    lw: &[f32],
-    g: &[f32],
-    inv_eps: f32,
-    ranges: &[Range<usize>],
-    acc: &mut RowSum,
-) -> u64 {
-    let mut scores = [f32::NEG_INFINITY; BLOCK];
-    let mut fill = 0;
-    let mut pairs = 0;
-    for range in ranges {
-        let mut start = range.start;
-        while start < range.end {
-            let len = (range.end - start).min(BLOCK - fill);
-            score_into::<false>(
-                x,
-                y,
-                lw,
-                g,
-                inv_eps,
-                start..start + len,
-                &mut scores[fill..fill + len],
-                &mut [],
-            );
-            fill += len;
-            start += len;
-            if fill == BLOCK {
-                reduce_scores(&mut scores, acc);
-                fill = 0;
-            }
-        }
-        pairs += range.len() as u64;
-    }
-    if fill > 0 {
-        let padded = fill.div_ceil(LANES) * LANES;
-        scores[fill..padded].fill(f32::NEG_INFINITY);
-        reduce_scores(&mut scores[..padded], acc);
-    }
-    pairs
-}
-
-/// Adds `Σ exp(score)` of a buffer whose length is a multiple of [`LANES`] to `acc` (the buffer is overwritten).
-#[inline(always)]
-fn reduce_scores(scores: &mut [f32], acc: &mut RowSum) {
-    acc.rescale_to(lane_max(scores));
-    if acc.max == f32::NEG_INFINITY {
-        return;
-    }
-    let m = acc.max;
-    for s in scores.iter_mut() {
-        *s = exp_nonpositive(*s - m);
-    }
-    acc.sum += f64::from(lane_sum(scores));
-}
-
-/// The body of [`stream_blocks`]: scores, their maximum, weights, then one sum per block.
-#[inline(always)]
-fn block_sums(
-    x: &Point,
-    y: &[Vec<f32>; DIM],
-    lw: &[f32],
-    g: &[f32],
-    inv_eps: f32,
-    ranges: &[Range<usize>],
-    sums: &mut BlockSums,
-) -> u64 {
-    let mut len = 0;
-    for range in ranges {
-        score_into::<false>(
-            x,
-            y,
-            lw,
-            g,
-            inv_eps,
-            range.clone(),
-            &mut sums.scores[len..len + range.len()],
-            &mut [],
-        );
-        len += range.len();
-    }
-    let padded = len.div_ceil(LANES) * LANES;
-    let scores = &mut sums.scores[..padded];
-    scores[len..].fill(f32::NEG_INFINITY);
-    let m = lane_max(scores);
-    sums.max = m;
-    if m == f32::NEG_INFINITY {
-        sums.out.fill(0.0);
-        return len as u64;
-    }
-    for s in scores.iter_mut() {
-        *s = exp_nonpositive(*s - m);
-    }
-    let mut start = 0;
-    for (o, &l) in sums.out.iter_mut().zip(sums.lens) {
-        let end = start + l as usize;
-        let mut t = 0.0f32;
-        for &w in &scores[start..end] {
-            t += w;
-        }
-        *o = t;
-        start = end;
-    }
-    len as u64
-}
-
-/// Per-block buffers of a streamed row.
-struct Scratch {
-    scores: [f32; BLOCK],
-    costs: [f32; BLOCK],
-    weights: [f32; BLOCK],
-}
-
-/// Streams one range of targets into `acc` with its moments, in blocks of [`BLOCK`];
-/// returns its length.
-#[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn push_range_moments(
-    x: &Point,
-    y: &[Vec<f32>; DIM],
-    lw: &[f32],
-    g: &[f32],
-    inv_eps: f32,
-    range: Range<usize>,
-    acc: &mut RowSum,
-    scratch: &mut Scratch,
-) -> u64 {
-    let Scratch {
-        scores,
-        costs,
-        weights,
-    } = scratch;
-    let mut start = range.start;
-    while start < range.end {
-        let len = (range.end - start).min(BLOCK);
-        let padded = len.div_ceil(LANES) * LANES;
-        score_into::<true>(
-            x,
-            y,
-            lw,
-            g,
-            inv_eps,
-            start..start + len,
-            &mut scores[..len],
-            &mut costs[..len],
-        );
-        scores[len..padded].fill(f32::NEG_INFINITY);
-        let block_max = lane_max(&scores[..padded]);
-        acc.rescale_to(block_max);
-        if acc.max == f32::NEG_INFINITY {
-            start += len;
-            continue;
-        }
-        let m = acc.max;
-        for (w, &sc) in weights[..padded].iter_mut().zip(&scores[..padded]) {
-            *w = exp_nonpositive(sc - m);
-        }
-        acc.sum += f64::from(lane_sum(&weights[..padded]));
-        let mut mom = [0.0f32; DIM + 1];
-        for k in 0..len {
-            for d in 0..DIM {
-                mom[d] += weights[k] * y[d][start + k];
-            }
-            mom[DIM] += weights[k] * costs[k];
-        }
-        for (a, b) in acc.moments.iter_mut().zip(mom) {
-            *a += f64::from(b);
-        }
-        start += len;
-    }
-    range.len() as u64
-}
-
-/// Sum of a slice whose length is a multiple of [`LANES`], in vectorisable lanes (fixed order).
-#[inline(always)]
-fn lane_sum(values: &[f32]) -> f32 {
-    let mut lanes = [0.0f32; LANES];
-    for chunk in values.chunks_exact(LANES) {
-        for l in 0..LANES {
-            lanes[l] += chunk[l];
-        }
-    }
-    lanes.iter().sum()
-}
-
-/// Maximum of a slice whose length is a multiple of [`LANES`], in vectorisable lanes.
-#[inline(always)]
-fn lane_max(values: &[f32]) -> f32 {
-    let mut lanes = [f32::NEG_INFINITY; LANES];
-    for chunk in values.chunks_exact(LANES) {
-        for l in 0..LANES {
-            lanes[l] = if chunk[l] > lanes[l] {
-                chunk[l]
-            } else {
-                lanes[l]
-            };
-        }
-    }
-    lanes.iter().copied().fold(f32::NEG_INFINITY, f32::max)
 }
 
 #[cfg(test)]
