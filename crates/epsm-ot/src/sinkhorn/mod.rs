@@ -70,6 +70,7 @@ mod centre;
 mod coarse;
 mod dual;
 mod pass;
+mod polish;
 mod settings;
 
 use crate::clusters::Clustered;
@@ -81,7 +82,8 @@ use crate::points::{Point, PointCloud, check_pair};
 
 use centre::Centred;
 use dual::Guards;
-pub(crate) use dual::{Dual, converged, polish, solve_dual};
+pub(crate) use dual::{Dual, converged, solve_dual};
+pub(crate) use polish::polish;
 pub use settings::{MAX_SPREAD, MIN_BLUR, SinkhornSettings};
 
 /// One entropic problem solved: potentials, barycentres (clustered order) and costs.
