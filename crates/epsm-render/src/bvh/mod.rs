@@ -14,7 +14,7 @@
 //! parameter `t` is the same at both levels and in [`Hit::t`].
 //!
 //! Exact spheres ([`Surface::Sphere`]) have no bottom level: a ray mapped to
-//! object space is tested against the unit sphere ([`sphere`]). A scene with
+//! object space is tested against the unit sphere ([`crate::sphere`]). A scene with
 //! at most `MAX_LISTED_SPHERES` of them lists them and tests each one
 //! directly: the tracer's tile loop for such a scene is compiled to test
 //! them inline before the static BVH's walk, independent of it

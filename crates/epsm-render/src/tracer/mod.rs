@@ -3,7 +3,7 @@
 //! over tiles, and optional path recording.
 //!
 //! Determinism: every random number comes from a
-//! [`PixelSampler`], keyed by
+//! [`PixelSampler`](crate::sampler::PixelSampler), keyed by
 //! `(seed, pixel, sample, dimension)`, and each pixel sums its samples in
 //! order, so an image is bit-identical whatever the thread count.
 //!
@@ -95,7 +95,7 @@ pub struct TraceCounters {
     /// Shadow rays traced.
     pub shadow_rays: u64,
     /// Samples whose radiance was NaN or infinite (dropped: zero in the
-    /// image, and a record marked [`SampleDrop::NonFinite`]).
+    /// image, and a record marked [`SampleDrop::NonFinite`](crate::record::SampleDrop::NonFinite)).
     pub non_finite: u64,
     /// Paths ended because the sampled direction lay on the wrong side of the
     /// geometric normal for its lobe (shading-normal light leak).
