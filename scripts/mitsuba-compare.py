@@ -81,7 +81,7 @@ PLY_DIR = pathlib.Path(tempfile.mkdtemp(prefix="epsm-mitsuba-"))
 
 
 def icosphere(levels):
-    """epsm's `sphere`: the icosahedron subdivided `levels` times (scene/shapes.rs)."""
+    """epsm's `sphere`: the icosahedron subdivided `levels` times (crates/epsm-scene/src/shapes.rs)."""
     t = (1.0 + 5.0**0.5) / 2.0
     corners = [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t),
                (0, -1, -t), (0, 1, -t), (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]

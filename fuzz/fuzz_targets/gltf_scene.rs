@@ -6,5 +6,5 @@ use std::path::Path;
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
-    let _ = epsm_render::scene::import::gltf_scene::from_slice(data, Path::new("fuzz/fuzz.gltf"));
+    let _ = epsm_scene::import::gltf_scene::from_slice(data, Path::new("fuzz/fuzz.gltf"));
 });

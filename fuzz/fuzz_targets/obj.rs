@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use epsm_render::scene::import::{obj, validate};
+use epsm_scene::import::{obj, validate};
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {

@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use epsm_render::scene::import::{ply, validate};
+use epsm_scene::import::{ply, validate};
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {

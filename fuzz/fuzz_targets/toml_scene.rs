@@ -7,6 +7,6 @@ use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
     if let Ok(text) = std::str::from_utf8(data) {
-        let _ = epsm_render::scene::parts_from_str(text, Path::new("fuzz/fuzz.toml"));
+        let _ = epsm_scene::parts_from_str(text, Path::new("fuzz/fuzz.toml"));
     }
 });

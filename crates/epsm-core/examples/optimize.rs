@@ -3,7 +3,7 @@
 //! place. Run: `cargo run --release -p epsm-core --example optimize`.
 
 use epsm_core::{Optimization, ParamSpec, Problem};
-use epsm_render::scene::load_parts;
+use epsm_scene::load_parts;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let scene = load_parts(std::path::Path::new("scenes/layout.toml"))?;

@@ -21,7 +21,7 @@ pub type Result<T, E = Error> = std::result::Result<T, E>;
 
 /// An error and its chain of causes on one line (`error: cause: cause`), as
 /// the binaries print it. A cause whose message the line already holds is
-/// left out: errors such as `epsm_render::Error::Io` write their source
+/// left out: errors such as `epsm_scene::Error::Io` write their source
 /// into their own message and also return it as their source.
 pub fn error_chain(e: &dyn std::error::Error) -> String {
     let mut line = e.to_string();
@@ -71,8 +71,8 @@ mod tests {
     }
 
     #[test]
-    fn a_render_io_error_names_its_cause_once() {
-        let e = epsm_render::scene::load::load_scene("/nonexistent/scene.toml".as_ref())
+    fn a_scene_io_error_names_its_cause_once() {
+        let e = epsm_scene::load::load_scene("/nonexistent/scene.toml".as_ref())
             .expect_err("no such file");
         let line = error_chain(&e);
         assert_eq!(

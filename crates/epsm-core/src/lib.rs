@@ -55,7 +55,7 @@
 //! ```no_run
 //! use epsm_core::{ParamTable, SolveSettings, classify, solve_adjoint};
 //! use epsm_render::record::RecordLevel;
-//! use epsm_render::scene::load::load_scene;
+//! use epsm_scene::load::load_scene;
 //! use epsm_render::tracer::{RenderOptions, render_recorded};
 //! # fn main() -> Result<(), Box<dyn std::error::Error>> {
 //! let scene = load_scene("scenes/mirror.toml".as_ref())?;
@@ -109,7 +109,7 @@ pub mod vertex;
 pub use drops::{DropCounts, DropReason, Dropped};
 /// Scene loading (TOML, glTF 2.0, Mitsuba 3 XML) for front ends that reach
 /// the renderer through this crate.
-pub use epsm_render::scene::{load_parts, load_scene};
+pub use epsm_scene::{load_parts, load_scene};
 pub use error::{Error, Result, error_chain};
 pub use motion::Motion;
 pub use params::ParamTable;

@@ -129,14 +129,14 @@ pub fn csv(keys: &[String], rows: &[Row]) -> String {
 }
 
 /// Writes `bytes` to `path` atomically
-/// ([`epsm_render::atomic_file::write_atomic`]), creating the parent folder.
+/// ([`epsm_scene::atomic_file::write_atomic`]), creating the parent folder.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> OptResult<()> {
     let err = |e: std::io::Error| OptimizeError::File {
         path: path.to_owned(),
         message: e.to_string(),
     };
-    epsm_render::atomic_file::create_parent(path).map_err(err)?;
-    epsm_render::atomic_file::write_atomic(path, err, |out| {
+    epsm_scene::atomic_file::create_parent(path).map_err(err)?;
+    epsm_scene::atomic_file::write_atomic(path, err, |out| {
         std::io::Write::write_all(out, bytes).map_err(err)
     })
 }

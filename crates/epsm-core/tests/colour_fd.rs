@@ -28,9 +28,9 @@ use epsm_core::backprop::{PassInput, backprop, record_level};
 use epsm_core::colour::{ColourModel, PrimaryMotion};
 use epsm_core::loss::{LossKind, evaluate};
 use epsm_core::schedule::PathUse;
-use epsm_render::scene::load::parts_from_str;
 use epsm_render::tracer::{RenderOptions, render, render_recorded};
 use epsm_render::{Image, Scene};
+use epsm_scene::load::parts_from_str;
 
 /// Independent renders (seeds) averaged into one image.
 const CHUNKS: u32 = 16;

@@ -13,8 +13,8 @@ use epsm_core::schedule::PathUse;
 use epsm_core::{DropReason, ParamTable, SolveSettings, classify};
 use epsm_render::Scene;
 use epsm_render::record::{PathRecord, RecordLevel};
-use epsm_render::scene::load::parts_from_str;
 use epsm_render::tracer::{RenderOptions, render_recorded};
+use epsm_scene::load::parts_from_str;
 use epsm_testkit::scenes::{OVERFLOWING_LIGHT, OVERHEAD_CAMERA, WALL_BESIDE_THE_LIGHT};
 use glam::{DVec2, Vec3};
 

@@ -10,8 +10,8 @@ use epsm_core::{ParamTable, PathKind, classify};
 use epsm_render::Scene;
 use epsm_render::record::RecordLevel;
 use epsm_render::scene::Surface;
-use epsm_render::scene::load::load_scene;
 use epsm_render::tracer::{PixelSample, RenderOptions, trace_samples};
+use epsm_scene::load::load_scene;
 use glam::UVec2;
 
 const PER_TYPE: usize = 80;

@@ -51,17 +51,18 @@
 //! # Ok::<(), epsm_ot::OtError>(())
 //! ```
 
-mod blocks;
+mod clusters;
 pub mod cost;
+mod cpu;
 mod disjoint_sets;
 pub mod error;
 pub mod estimate;
 pub mod exact;
-mod kernel;
 pub mod plan;
 pub mod points;
 pub mod sinkhorn;
 pub mod sliced;
+mod softmin;
 pub mod synthetic;
 pub mod warm;
 

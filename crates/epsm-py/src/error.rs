@@ -3,7 +3,8 @@
 //! its `file`, `line` and dotted `field` (`None` otherwise).
 
 use epsm_core::OptimizeError;
-use epsm_render::SceneError;
+use epsm_core::problem::ProblemError;
+use epsm_scene::FieldError;
 use pyo3::exceptions::PyException;
 use pyo3::prelude::*;
 
@@ -19,24 +20,39 @@ pyo3::create_exception!(
 /// An error of the core crates that may be located in a file.
 pub trait Located: std::error::Error {
     /// The file, line and field, when known.
-    fn location(&self) -> Option<&SceneError>;
+    fn location(&self) -> Option<&FieldError>;
     /// The dotted field, when known without a file.
     fn field(&self) -> Option<&str> {
         self.location().map(|s| s.field.as_str())
     }
 }
 
-impl Located for epsm_render::Error {
-    fn location(&self) -> Option<&SceneError> {
+impl Located for epsm_scene::Error {
+    fn location(&self) -> Option<&FieldError> {
         match self {
-            epsm_render::Error::Scene(s) => Some(s),
+            epsm_scene::Error::Field(s) => Some(s),
             _ => None,
         }
     }
 }
 
+impl Located for epsm_render::Error {
+    fn location(&self) -> Option<&FieldError> {
+        None
+    }
+}
+
+impl Located for ProblemError {
+    fn location(&self) -> Option<&FieldError> {
+        match self {
+            ProblemError::Field(s) => Some(s),
+            ProblemError::Read(e) => e.location(),
+        }
+    }
+}
+
 impl Located for epsm_core::Error {
-    fn location(&self) -> Option<&SceneError> {
+    fn location(&self) -> Option<&FieldError> {
         None
     }
 
@@ -48,16 +64,18 @@ impl Located for epsm_core::Error {
 }
 
 impl Located for OptimizeError {
-    fn location(&self) -> Option<&SceneError> {
+    fn location(&self) -> Option<&FieldError> {
         match self {
-            OptimizeError::Render(e) => e.location(),
+            OptimizeError::Problem(e) => e.location(),
+            OptimizeError::Scene(e) => e.location(),
             _ => None,
         }
     }
 
     fn field(&self) -> Option<&str> {
         match self {
-            OptimizeError::Render(e) => e.field(),
+            OptimizeError::Problem(e) => e.field(),
+            OptimizeError::Scene(e) => e.field(),
             OptimizeError::Param(e) => e.field(),
             _ => None,
         }

@@ -83,7 +83,7 @@ fn dims(shape: &[usize]) -> [usize; 3] {
 #[pyfunction]
 pub fn read_image<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyArray3<f32>>> {
     let img = py
-        .detach(|| epsm_render::image_io::read_image(&path))
+        .detach(|| epsm_scene::image_io::read_image(&path))
         .map_err(to_py)?;
     Ok(to_array(py, &img))
 }
@@ -95,6 +95,6 @@ pub fn read_image<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, Py
 #[pyfunction]
 pub fn write_image(py: Python<'_>, path: PathBuf, image: &Bound<'_, PyAny>) -> PyResult<()> {
     let img = from_array(image, "image")?;
-    py.detach(|| epsm_render::image_io::write_image(&path, &img))
+    py.detach(|| epsm_scene::image_io::write_image(&path, &img))
         .map_err(to_py)
 }

@@ -250,7 +250,7 @@ impl Optimization {
                 message,
             })
         };
-        let text = epsm_render::input_file::read_to_string(&path)
+        let text = epsm_scene::input_file::read_to_string(&path)
             .map_err(|e| to_py(OptimizeError::from(e)))?;
         let saved: Saved = serde_json::from_str(&text).map_err(|e| file_error(e.to_string()))?;
         let problem = py.detach(|| saved.problem.load()).map_err(to_py)?;

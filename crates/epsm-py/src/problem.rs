@@ -37,12 +37,12 @@ impl Source {
     /// Loads and checks the problem.
     pub fn load(&self) -> epsm_core::OptResult<epsm_core::Problem> {
         match self {
-            Source::File(path) => epsm_core::load_problem(path),
+            Source::File(path) => epsm_core::load_problem(path).map_err(Into::into),
             Source::Text {
                 text,
                 file,
                 target: None,
-            } => epsm_core::problem_from_str(text, file),
+            } => epsm_core::problem_from_str(text, file).map_err(Into::into),
             Source::Text {
                 text,
                 file,
@@ -54,7 +54,7 @@ impl Source {
                     height: *height,
                     pixels,
                 };
-                epsm_core::problem_with_target(text, file, image)
+                epsm_core::problem_with_target(text, file, image).map_err(Into::into)
             }
         }
     }
@@ -183,7 +183,7 @@ impl Problem {
     ) -> PyResult<Self> {
         let (text, file, target) = match &self.source {
             Source::File(path) => {
-                let text = epsm_render::input_file::read_to_string(path).map_err(to_py)?;
+                let text = epsm_scene::input_file::read_to_string(path).map_err(to_py)?;
                 (text, path.clone(), None)
             }
             Source::Text { text, file, target } => (text.clone(), file.clone(), target.clone()),

@@ -1,9 +1,11 @@
 //! # epsm-render
 //!
-//! The forward half of epsm: the scene model and its loaders, the two-level BVH,
-//! materials, lights, the camera, a deterministic path tracer (rayon over tiles)
-//! and the path records the differentiation side (`epsm-core`) consumes. This
-//! crate knows nothing about derivatives of geometry.
+//! The forward half of epsm: the scene model, the two-level BVH, materials,
+//! lights, the camera, a deterministic path tracer (rayon over tiles) and the
+//! path records the differentiation side (`epsm-core`) consumes. This crate
+//! knows nothing about derivatives of geometry, nor about files: scene files,
+//! mesh and image formats are `epsm-scene`'s, which builds the [`Scene`] this
+//! crate renders.
 //!
 //! On x86-64 CPUs with AVX-512 or AVX2 the tracer renders sixteen paths at
 //! once, one per vector lane: the private module `simd` holds the lane types
@@ -18,7 +20,7 @@
 //! - **Angles**: degrees in scene files, radians in code.
 //! - **Colour**: linear RGB, `f32`. Area-light and background values are
 //!   radiance (W·sr⁻¹·m⁻²); point-light values are radiant intensity (W·sr⁻¹).
-//!   PNG files are sRGB-encoded, EXR files linear.
+//!   PNG files (`epsm-scene`) are sRGB-encoded, EXR files linear.
 //! - **Directions** at a vertex: `wi` points toward the previous vertex (the
 //!   camera side) and `wo` toward the next vertex (the light side). Both are
 //!   unit vectors pointing *away* from the surface. Light flows `wo → wi`.
@@ -39,15 +41,12 @@
 //!   octahedral coordinates of the object-space point ([`sphere`]) and the
 //!   triangle index is 0.
 
-pub mod atomic_file;
 pub mod bvh;
 pub mod camera;
 pub mod error;
 pub mod film;
 pub mod frame;
 pub mod hit;
-pub mod image_io;
-pub mod input_file;
 pub mod lights;
 pub mod materials;
 pub mod ray;
@@ -60,7 +59,7 @@ pub mod sphere;
 pub mod tracer;
 
 pub use camera::Camera;
-pub use error::{Error, SceneError};
+pub use error::{Error, Result};
 pub use film::Image;
 pub use frame::Frame;
 pub use ray::Ray;

@@ -6,8 +6,8 @@
 use std::path::PathBuf;
 
 use epsm_render::Scene;
-use epsm_render::scene::load::{load_parts, load_scene};
 use epsm_render::tracer::{RenderOptions, render};
+use epsm_scene::load::{load_parts, load_scene};
 use glam::{DAffine3, DVec3};
 
 fn caustic_box() -> PathBuf {

@@ -5,8 +5,8 @@ use std::path::Path;
 
 use epsm_render::Scene;
 use epsm_render::record::{RecordLevel, SampleDrop};
-use epsm_render::scene::load::parts_from_str;
 use epsm_render::tracer::{RenderOptions, render, render_logged, render_recorded};
+use epsm_scene::load::parts_from_str;
 use epsm_testkit::scenes::{OVERFLOWING_LIGHT, OVERHEAD_CAMERA, WALL_BESIDE_THE_LIGHT};
 use glam::{UVec2, Vec3};
 
@@ -225,7 +225,7 @@ fn shipped(name: &str) -> Scene {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../../scenes")
         .join(name);
-    epsm_render::scene::load::load_scene(&path).expect("shipped scene loads")
+    epsm_scene::load::load_scene(&path).expect("shipped scene loads")
 }
 
 #[test]

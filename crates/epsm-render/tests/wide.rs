@@ -5,10 +5,10 @@
 
 use std::path::Path;
 
-use epsm_render::image_io::write_image;
-use epsm_render::scene::load::load_scene;
 use epsm_render::tracer::{Kernel, RenderOptions, render_with};
 use epsm_render::{Image, Scene};
+use epsm_scene::image_io::write_image;
+use epsm_scene::load::load_scene;
 use glam::{DVec3, Vec3};
 
 fn scene(name: &str) -> Scene {

@@ -1,7 +1,7 @@
 //! The recent-files list: the last few problem files opened, newest first,
 //! kept one path per line in a small text file (written atomically) when a
 //! location is given, else for the session only. The file is read through
-//! [`epsm_render::input_file`]: anything but a regular file there (a FIFO,
+//! [`epsm_scene::input_file`]: anything but a regular file there (a FIFO,
 //! a device, a folder) counts as no list, like a missing file.
 
 use std::path::{Path, PathBuf};
@@ -59,8 +59,8 @@ impl Recent {
 }
 
 /// The paths listed in the regular file `store`, one a line.
-fn read(store: &Path) -> Result<Vec<PathBuf>, epsm_render::Error> {
-    let text = epsm_render::input_file::read_to_string(store)?;
+fn read(store: &Path) -> Result<Vec<PathBuf>, epsm_scene::Error> {
+    let text = epsm_scene::input_file::read_to_string(store)?;
     Ok(text
         .lines()
         .filter(|l| !l.is_empty())

@@ -87,9 +87,9 @@ fn ready(model: &Model, iterations: usize) -> bool {
 fn save(path: &std::path::Path, image: &egui::ColorImage) -> anyhow::Result<()> {
     let [w, h] = image.size;
     let rgba: Vec<u8> = image.pixels.iter().flat_map(|c| c.to_array()).collect();
-    epsm_render::atomic_file::create_parent(path)?;
+    epsm_scene::atomic_file::create_parent(path)?;
     let rgba8 = image::ExtendedColorType::Rgba8;
-    Ok(epsm_render::image_io::write_png_bytes(
+    Ok(epsm_scene::image_io::write_png_bytes(
         path, w as u32, h as u32, rgba8, &rgba,
     )?)
 }

@@ -5,7 +5,7 @@
 use eframe::egui::{self, Color32, ColorImage, TextureHandle, TextureOptions};
 use epsm_core::inspect::{flow_colour, signed_colour};
 use epsm_render::Image;
-use epsm_render::image_io::linear_to_srgb;
+use epsm_scene::image_io::linear_to_srgb;
 use glam::DVec2;
 
 fn byte(v: f32) -> u8 {

@@ -3,7 +3,7 @@
 
 use epsm_core::inspect::Segment;
 use epsm_render::Image;
-use epsm_render::image_io::linear_to_srgb;
+use epsm_scene::image_io::linear_to_srgb;
 use plotters::prelude::*;
 
 /// An enlarged RGB8 canvas: each source pixel becomes a `scale × scale`

@@ -23,8 +23,8 @@ use anyhow::Context;
 use epsm_core::check::{CheckReport, CheckSettings, check_paths};
 use epsm_core::{DropCounts, ParamTable, PathKind, classify};
 use epsm_render::record::RecordLevel;
-use epsm_render::scene::load::load_scene;
 use epsm_render::tracer::{PixelSample, RenderOptions, trace_samples};
+use epsm_scene::load::load_scene;
 use glam::UVec2;
 
 /// Arguments of `epsm check`.

@@ -14,7 +14,7 @@ use epsm_core::inspect::matching_lines;
 use epsm_core::loss::{match_images, matcher_named, resample};
 use epsm_core::problem::desc::LossDesc;
 use epsm_ot::{MatchLimits, Matching};
-use epsm_render::image_io::read_image;
+use epsm_scene::image_io::read_image;
 
 use super::canvas::{Canvas, srgb};
 use super::plots::write_png;

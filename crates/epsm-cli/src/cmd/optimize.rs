@@ -29,7 +29,7 @@ use std::fmt::Write as _;
 use epsm_core::report::{Timings, csv, mean_timings, param_error, write_atomic};
 use epsm_core::{Method, Optimization, Problem, load_problem};
 use epsm_render::Image;
-use epsm_render::image_io::{read_image, write_image};
+use epsm_scene::image_io::{read_image, write_image};
 
 use super::plots::{Figure, Panel, Series, Thumb, plot_figure};
 use crate::progress;

@@ -15,7 +15,7 @@ use std::path::Path;
 
 use anyhow::Context;
 use epsm_render::Image;
-use epsm_render::image_io::linear_to_srgb;
+use epsm_scene::image_io::linear_to_srgb;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::FontStyle;
@@ -393,10 +393,10 @@ fn blit(buf: &mut [u8], buf_w: u32, img: &Image, at: &Placed) {
 
 /// Writes an 8-bit RGB buffer as PNG atomically, creating the folder.
 pub fn write_png(path: &Path, w: u32, h: u32, rgb: &[u8]) -> anyhow::Result<()> {
-    epsm_render::atomic_file::create_parent(path)
+    epsm_scene::atomic_file::create_parent(path)
         .with_context(|| format!("creating the folder of {}", path.display()))?;
     let rgb8 = image::ExtendedColorType::Rgb8;
-    Ok(epsm_render::image_io::write_png_bytes(
+    Ok(epsm_scene::image_io::write_png_bytes(
         path, w, h, rgb8, rgb,
     )?)
 }

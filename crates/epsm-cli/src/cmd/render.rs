@@ -3,9 +3,9 @@
 use std::path::PathBuf;
 
 use anyhow::Context;
-use epsm_render::image_io::write_image;
-use epsm_render::scene::load::load_scene;
 use epsm_render::tracer::{RenderOptions, render};
+use epsm_scene::image_io::write_image;
+use epsm_scene::load::load_scene;
 
 use crate::progress;
 

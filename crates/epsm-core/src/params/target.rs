@@ -3,8 +3,8 @@
 
 use std::borrow::Cow;
 
-use epsm_render::scene::load::MIN_ALPHA;
 use epsm_render::scene::{MaterialId, ObjectId};
+use epsm_scene::fields::MIN_ALPHA;
 
 use crate::error::{Error, Result};
 

@@ -29,7 +29,7 @@
 //! bounds = [-1.5, 0.3]
 //! ```
 
-use epsm_render::scene::desc::SceneDesc;
+use epsm_scene::desc::SceneDesc;
 use serde::{Deserialize, Serialize};
 
 /// A whole problem file.

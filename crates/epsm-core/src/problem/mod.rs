@@ -2,8 +2,8 @@
 //! the target, the loss, the optimizer and the output settings, loaded from
 //! a TOML problem file ([`desc`], `docs/problem-format.md`) or built in code.
 //!
-//! Every malformed field gives a located [`epsm_render::SceneError`] (file, line, dotted
-//! field) through [`crate::OptimizeError::Render`]; nothing panics.
+//! Every malformed field gives a [`ProblemError`] naming the file, the line
+//! and the dotted field; nothing panics.
 //!
 //! ```toml
 //! scene_file = "../layout.toml"
@@ -20,6 +20,7 @@
 
 pub mod auto;
 pub mod desc;
+mod error;
 mod validate;
 
 use std::path::{Path, PathBuf};
@@ -28,9 +29,9 @@ use epsm_render::Image;
 use epsm_render::scene::SceneParts;
 
 use crate::loss::LossKind;
-use crate::run::OptResult;
 use crate::schedule::Method;
 pub use desc::ProblemDesc;
+pub use error::ProblemError;
 
 /// One optimized parameter.
 #[derive(Clone, Debug, PartialEq)]
@@ -241,14 +242,15 @@ impl Problem {
 }
 
 /// Loads and checks the problem file at `path`.
-pub fn load_problem(path: &Path) -> OptResult<Problem> {
-    problem_from_str(&epsm_render::input_file::read_to_string(path)?, path)
+pub fn load_problem(path: &Path) -> Result<Problem, ProblemError> {
+    let text = epsm_scene::input_file::read_to_string(path).map_err(ProblemError::Read)?;
+    problem_from_str(&text, path)
 }
 
 /// Checks the text of a problem file; `file` names it in errors and its
 /// directory resolves relative paths.
-pub fn problem_from_str(text: &str, file: &Path) -> OptResult<Problem> {
-    let (desc, locator) = epsm_render::scene::load::parse_toml::<ProblemDesc>(text, file)?;
+pub fn problem_from_str(text: &str, file: &Path) -> Result<Problem, ProblemError> {
+    let (desc, locator) = epsm_scene::fields::parse::<ProblemDesc>(text, file)?;
     validate::problem(&desc, file, &locator, None)
 }
 
@@ -256,7 +258,11 @@ pub fn problem_from_str(text: &str, file: &Path) -> OptResult<Problem> {
 /// at the scene camera's resolution) in place of a `target.image` file
 /// (which the text must then leave out): checked as that field is, with
 /// errors naming `target.image`.
-pub fn problem_with_target(text: &str, file: &Path, target: Image) -> OptResult<Problem> {
-    let (desc, locator) = epsm_render::scene::load::parse_toml::<ProblemDesc>(text, file)?;
+pub fn problem_with_target(
+    text: &str,
+    file: &Path,
+    target: Image,
+) -> Result<Problem, ProblemError> {
+    let (desc, locator) = epsm_scene::fields::parse::<ProblemDesc>(text, file)?;
     validate::problem(&desc, file, &locator, Some(target))
 }

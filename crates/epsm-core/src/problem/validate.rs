@@ -4,15 +4,15 @@
 use std::path::Path;
 
 use epsm_ot::{MIN_BLUR, MatchLimits};
-use epsm_render::scene::load::{Ctx, Locator, load_parts, parts_from_desc};
 use epsm_render::{Image, Scene};
+use epsm_scene::fields::{Fields, Locator};
+use epsm_scene::{load::parts_from_desc, load_parts};
 
 use super::auto::scale;
 use super::desc::ProblemDesc;
-use super::{LossSettings, OptimizerSettings, ParamSpec, Passes, Problem, Target};
+use super::{LossSettings, OptimizerSettings, ParamSpec, Passes, Problem, ProblemError, Target};
 use crate::loss::LossKind;
 use crate::params::ParamTable;
-use crate::run::OptResult;
 use crate::schedule::Method;
 
 /// Builds the problem of `d`, with `given` (linear RGB) as its target image
@@ -22,26 +22,36 @@ pub(super) fn problem(
     file: &Path,
     locator: &Locator,
     given: Option<Image>,
-) -> OptResult<Problem> {
-    let c = Ctx::new(file, locator, "");
-    let scene = match (&d.scene_file, &d.scene) {
-        (Some(path), None) => load_parts(&c.resolve(path))
-            .map_err(|e| c.err("scene_file", format!("cannot load `{path}`: {e}")))?,
-        (None, Some(desc)) => parts_from_desc(desc, file, locator, "scene")?,
+) -> Result<Problem, ProblemError> {
+    let c = Fields::new(file, locator, "");
+    let (scene, scene_field) = match (&d.scene_file, &d.scene) {
+        (Some(path), None) => {
+            let parts = load_parts(&c.resolve(path))
+                .map_err(|e| c.located("scene_file", format!("cannot load `{path}`: {e}")))?;
+            (parts, "scene_file")
+        }
+        (None, Some(desc)) => {
+            // The embedded table's errors are located in this file already.
+            let parts = parts_from_desc(desc, file, locator, "scene").map_err(|e| match e {
+                epsm_scene::Error::Field(e) => e,
+                other => c.located("scene", other.to_string()),
+            })?;
+            (parts, "scene")
+        }
         _ => {
             return Err(c
-                .err(
+                .located(
                     "scene_file",
                     "give exactly one of `scene_file` and a `[scene]` table",
                 )
                 .into());
         }
     };
-    let probe = Scene::new(scene.clone())?;
+    let probe = Scene::new(scene.clone()).map_err(|e| c.located(scene_field, e.to_string()))?;
     let table = ParamTable::new(&probe);
     if d.parameters.is_empty() {
         return Err(c
-            .err("parameters", "expected at least one [[parameters]] entry")
+            .located("parameters", "expected at least one [[parameters]] entry")
             .into());
     }
     let lr = d
@@ -58,12 +68,12 @@ pub(super) fn problem(
         let f = |name: &str| format!("parameters[{i}].{name}");
         if params.iter().any(|q: &ParamSpec| q.key == p.key) {
             return Err(c
-                .err(&f("key"), format!("`{}` is listed twice", p.key))
+                .located(&f("key"), format!("`{}` is listed twice", p.key))
                 .into());
         }
         let param = table
             .resolve(&p.key)
-            .map_err(|e| c.err(&f("key"), e.to_string()))?;
+            .map_err(|e| c.located(&f("key"), e.to_string()))?;
         let (domain, range) = param.target.domain();
         let within_domain = |v: f64| v >= domain[0] && v <= domain[1];
         let bounds = match p.bounds {
@@ -123,21 +133,21 @@ pub(super) fn problem(
     let image = match (&d.target.image, given) {
         (Some(_), Some(_)) => {
             let msg = "the target is given as an image: leave `target.image` out";
-            return Err(c.err("target.image", msg).into());
+            return Err(c.located("target.image", msg).into());
         }
         (None, Some(img)) => Some(
-            epsm_render::image_io::check_values(file, &img, f32::INFINITY)
+            epsm_scene::image_io::check_values(file, &img, f32::INFINITY)
                 .map(|()| img)
-                .map_err(|e| c.err("target.image", e.to_string()))?,
+                .map_err(|e| c.located("target.image", e.to_string()))?,
         ),
         (Some(path), None) => {
             let path = c.resolve(path);
-            let img = epsm_render::image_io::read_image(&path)
+            let img = epsm_scene::image_io::read_image(&path)
                 .and_then(|img| {
-                    epsm_render::image_io::check_values(&path, &img, f32::INFINITY)?;
+                    epsm_scene::image_io::check_values(&path, &img, f32::INFINITY)?;
                     Ok(img)
                 })
-                .map_err(|e| c.err("target.image", e.to_string()))?;
+                .map_err(|e| c.located("target.image", e.to_string()))?;
             Some(img)
         }
         (None, None) => None,
@@ -150,14 +160,14 @@ pub(super) fn problem(
                     "image is {}x{} but the camera renders {}x{}",
                     img.width, img.height, cam.width, cam.height
                 );
-                return Err(c.err("target.image", msg).into());
+                return Err(c.located("target.image", msg).into());
             }
             Target::Image(img)
         }
         None => {
             if let Some(i) = params.iter().position(|p| p.true_value.is_none()) {
                 let msg = "without `target.image` every parameter needs a `true` value";
-                return Err(c.err(&format!("parameters[{i}]"), msg).into());
+                return Err(c.located(&format!("parameters[{i}]"), msg).into());
             }
             Target::Render {
                 spp: c.count("target.spp", d.target.spp, 1, 1 << 16)?,
@@ -179,7 +189,7 @@ pub(super) fn problem(
         "l2" => LossKind::L2,
         other => {
             let msg = format!("unknown loss `{other}`; expected ot_exact, ot_sinkhorn or l2");
-            return Err(c.err("loss.kind", msg).into());
+            return Err(c.located("loss.kind", msg).into());
         }
     };
     let [mw, mh] = l.match_resolution;
@@ -189,7 +199,7 @@ pub(super) fn problem(
         let n = mw as usize * mh as usize;
         matcher
             .check_size(n, &MatchLimits::default())
-            .map_err(|e| c.err("loss.match_resolution", e.to_string()))?;
+            .map_err(|e| c.located("loss.match_resolution", e.to_string()))?;
     }
     let o = &d.optimizer;
     let tolerance = d
@@ -197,7 +207,7 @@ pub(super) fn problem(
         .map(|v| c.check("tolerance", v, v > 0.0, "a positive parameter error"))
         .transpose()?;
     let method = Method::parse(&o.method).ok_or_else(|| {
-        c.err(
+        c.located(
             "optimizer.method",
             format!(
                 "unknown method `{}`; expected epsm, drot, l2 or prdpt",

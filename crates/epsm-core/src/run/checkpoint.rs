@@ -180,7 +180,7 @@ impl Optimization {
             path: path.to_owned(),
             message,
         };
-        let text = epsm_render::input_file::read_to_string(path)?;
+        let text = epsm_scene::input_file::read_to_string(path)?;
         serde_json::from_str(&text).map_err(|e| err(e.to_string()))
     }
 }

@@ -5,8 +5,14 @@ use std::path::PathBuf;
 /// Errors of loading a problem or running an optimization.
 #[derive(Debug, thiserror::Error)]
 pub enum OptimizeError {
-    /// The scene, a problem field, an image or a file write failed in the
-    /// renderer's loaders (located: file, line, field).
+    /// The problem file cannot be loaded (located: file, line, field).
+    #[error(transparent)]
+    Problem(#[from] crate::problem::ProblemError),
+    /// A file of the run (a checkpoint read, an image or table written)
+    /// failed in `epsm-scene`'s file layer.
+    #[error(transparent)]
+    Scene(#[from] epsm_scene::Error),
+    /// The renderer refused a scene (an emissive exact sphere, ...).
     #[error(transparent)]
     Render(#[from] epsm_render::Error),
     /// A parameter key does not fit the scene.

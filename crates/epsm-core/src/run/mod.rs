@@ -25,7 +25,7 @@
 //!
 //! ```no_run
 //! use epsm_core::{Optimization, ParamSpec, Problem};
-//! let scene = epsm_render::scene::load_parts("scenes/layout.toml".as_ref())?;
+//! let scene = epsm_scene::load_parts("scenes/layout.toml".as_ref())?;
 //! let params = vec![ParamSpec::new("table.translate.x", -0.5, 0.04).with_true(0.0)];
 //! let mut opt = Optimization::new(Problem::new(scene, params))?;
 //! while !opt.is_done() {
@@ -37,6 +37,7 @@
 
 pub mod best;
 mod checkpoint;
+mod choose;
 mod error;
 pub mod noise;
 pub mod prdpt;
@@ -51,15 +52,15 @@ use epsm_render::{Image, Scene};
 
 pub use best::{Best, Judge};
 pub use checkpoint::Checkpoint;
+use choose::choose;
 pub use error::{OptResult, OptimizeError};
-use noise::Noise;
 
 use crate::backprop::{PassInput, PassStats, backprop, record_level};
 use crate::colour::{ColourModel, PrimaryMotion};
 use crate::loss::{LossEval, LossKind, add_flow, evaluate, resample, rmse};
 use crate::optim::{Adam, AdamSettings};
 use crate::params::ParamTable;
-use crate::problem::auto::{self, Choice, is_camera, is_geometric};
+use crate::problem::auto::{self, Choice};
 use crate::problem::{LossImage, Problem, Target};
 use crate::report::{Row, Timings, param_error};
 use crate::schedule::{Method, Schedule};
@@ -604,128 +605,6 @@ impl Optimization {
         let since = self.best.as_ref().map_or(0, |b| b.iteration).max(switch);
         self.iteration - since >= window(self.schedule.iterations)
     }
-}
-
-/// Makes the run's automatic choices for `problem` (resolving its
-/// `None` settings in place, recording each in `choices`): the step sizes,
-/// the colour-flow term, the decay, the matched render's samples and the
-/// hybrid switch.
-/// Returns the schedule and the judge of θ.
-fn choose(
-    problem: &mut Problem,
-    grad: &View,
-    target_match: &Image,
-    choices: &mut Vec<Choice>,
-) -> (Schedule, Judge) {
-    let targets: Vec<_> = grad.table.params().iter().map(|p| p.target).collect();
-    let n = problem.optimizer.iterations;
-    for (i, p) in problem.params.iter_mut().enumerate() {
-        if let Some(step) = &p.step {
-            p.lr = step.lr(n);
-            let why = format!(
-                "{}: {} x scale / {n} iterations, scale {} ({})",
-                p.key,
-                auto::CROSSING,
-                step.scale,
-                step.why
-            );
-            choices.push(Choice::new(
-                format!("parameters[{i}].lr"),
-                format!("{:.4}", p.lr),
-                why,
-            ));
-        }
-    }
-    if problem.loss.flow.is_none() {
-        let camera = targets.iter().any(is_camera);
-        let why = if camera {
-            "a camera parameter is optimized: the whole image moves"
-        } else {
-            "no camera parameter is optimized"
-        };
-        problem.loss.flow = Some(camera);
-        choices.push(Choice::new("loss.flow", camera.to_string(), why));
-    }
-    if problem.optimizer.beta2.is_none() {
-        let material_only = !targets.iter().any(is_geometric);
-        let b = auto::beta2(material_only);
-        problem.optimizer.beta2 = Some(b);
-        let why = if material_only {
-            "every parameter is a material value: L2 throughout, whose gradient shrinks with \
-             the error; a short second-moment memory keeps the late steps long"
-        } else {
-            "a long second-moment memory (geometric parameters)"
-        };
-        choices.push(Choice::new("optimizer.beta2", b.to_string(), why));
-    }
-    if problem.optimizer.decay.is_none() {
-        let d = auto::decay(n);
-        problem.optimizer.decay = Some(d);
-        let why = format!(
-            "the learning rate falls to 1/{} of its first value over {n} iterations",
-            auto::FINAL_LR_DIVISOR
-        );
-        choices.push(Choice::new("optimizer.decay", format!("{d:.4}"), why));
-    }
-    let spp_grad = problem.passes.spp_grad;
-    if problem.passes.spp_match.is_none() && problem.loss.flow == Some(true) {
-        problem.passes.spp_match = Some(0);
-        let why = "the colour-flow term turns the matching's colour residual into the camera's \
-                   gradient, and a clean matched image leaves almost none: the gradient pass's image";
-        choices.push(Choice::new("render.spp_match", "0", why));
-    }
-    if problem.passes.spp_match.is_none() {
-        let seed = problem.optimizer.seed;
-        let seeds = [stream_seed(seed, 0, 0xA1), stream_seed(seed, 0, 0xA2)];
-        let noise = Noise::measure(&grad.scene, target_match, seeds);
-        let spp = noise.spp_match(spp_grad);
-        problem.passes.spp_match = Some(spp);
-        let why = format!(
-            "noise of one sample {:.2e} against the target's signal {:.2e} (tone-mapped variances): \
-             {:.0} spp keep the noise under {} % of the signal{}",
-            noise.per_sample,
-            noise.signal,
-            noise.needed_spp(),
-            noise::NOISE_FRACTION * 100.0,
-            if spp == 0 {
-                format!("; the gradient pass's {spp_grad} spp do")
-            } else {
-                format!(" (a power of two, at most {})", noise::MAX_SPP)
-            }
-        );
-        choices.push(Choice::new("render.spp_match", spp.to_string(), why));
-    }
-    let o = &problem.optimizer;
-    let kind = problem.loss.kind;
-    let ot = o.method.uses_ot() && kind.is_ot();
-    let schedule = match o.l2_fraction {
-        Some(f) => Schedule::fixed(o.method, kind, n, f),
-        None if ot && !targets.iter().any(is_geometric) => {
-            let why = "every parameter is a material value: L2 throughout";
-            choices.push(Choice::new("optimizer.l2_fraction", "1", why));
-            Schedule::fixed(o.method, kind, n, 1.0)
-        }
-        None => {
-            let (w, latest) = (window(n), latest_switch(n));
-            if ot {
-                let why = format!(
-                    "switch from OT to L2 (Adam reset) once the OT loss's moving average has not \
-                     fallen by 1 % for {w} iterations, at the latest before iteration {latest}"
-                );
-                choices.push(Choice::new("optimizer.l2_fraction", "on plateau", why));
-            }
-            Schedule::on_plateau(o.method, kind, n, w, latest)
-        }
-    };
-    let judge = Judge::new(n, problem.passes.spp_match.unwrap_or(0), spp_grad);
-    let why = format!(
-        "θ judged every {} iterations and at the end on two independent renders of {} spp in \
-         all (the product of their tone-mapped differences from the target); the best is \
-         reported and rendered",
-        judge.every, judge.spp
-    );
-    choices.push(Choice::new("best", "judged", why));
-    (schedule, judge)
 }
 
 fn render_image(scene: &Scene, spp: u32, seed: u32) -> Image {

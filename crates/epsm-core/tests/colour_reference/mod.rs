@@ -12,9 +12,9 @@ use epsm_render::lights::LightPoint;
 use epsm_render::materials::fresnel::fresnel_dielectric;
 use epsm_render::materials::{Bsdf, Lobe};
 use epsm_render::record::{PathRecord, RecordLevel, TrianglePoint, VertexRecord};
-use epsm_render::scene::load::parts_from_str;
 use epsm_render::tracer::{RenderOptions, render_recorded};
 use epsm_render::{Camera, Scene};
+use epsm_scene::load::parts_from_str;
 use glam::{DVec3, Vec2, Vec3};
 
 /// A floor, a diffuse box, a smooth diffuse ball, a rough metal panel, a

@@ -9,7 +9,7 @@
 
 use rayon::prelude::*;
 
-use crate::blocks::{Clustered, fit_potentials, kept_targets};
+use crate::clusters::{Clustered, fit_potentials, kept_targets};
 use crate::cost::sq_dist_f64;
 
 /// A candidate edge `(row, column, cost)`.
@@ -103,7 +103,7 @@ pub(crate) fn violations(
 }
 
 /// Whether the box bound proves `c_ij − u − v_j ≥ 0` for every member `j` of a
-/// target cluster, from `box_sq` (its [`crate::blocks::Cluster::box_dist_sq`]
+/// target cluster, from `box_sq` (its [`crate::clusters::Cluster::box_dist_sq`]
 /// from point `i`) and `max_v`, the largest `v_j` of the cluster.
 ///
 /// `c_ij ≥ box_sq` in exact arithmetic; the computed `box_sq`, the computed

@@ -34,7 +34,7 @@
 //!    violation: see `sparse`; each pair is screened in `f32` first and
 //!    tested in `f64` only if the screen cannot rule it out; block pairs are
 //!    skipped only when a rigorous bound proves `c_ij − u_i − v_j ≥ 0` for
-//!    all of them, see `blocks`) collects every pair with reduced cost below
+//!    all of them, see `clusters`) collects every pair with reduced cost below
 //!    `−tolerance`; each row's 4 × `candidates` worst violators are added to the
 //!    graph and the augmenting-path solve resumes. When none
 //!    remain, `u, v` are feasible for the full problem and tight on the
@@ -53,6 +53,8 @@
 mod auction;
 mod check;
 pub mod dense;
+mod finish;
+mod settings;
 mod sparse;
 pub(crate) mod warm;
 
@@ -60,126 +62,17 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use crate::blocks::{Clustered, Support};
-use crate::cost::{check_spread, diameter_sq, sq_dist_f64};
+use crate::clusters::{Clustered, Support};
+use crate::cost::sq_dist_f64;
 use crate::error::OtError;
 use crate::plan::{OtResult, PhaseTimes, SolveStats};
 use crate::points::{PointCloud, check_pair};
 use crate::sinkhorn::{SinkhornSettings, check_range, solve_dual};
-use check::violations;
+use finish::{VIOLATORS_PER_CANDIDATE, auction_potentials, finish};
+use settings::checked_diameter_sq;
+pub use settings::{ExactSettings, MAX_DIAMETER_SQ};
 use sparse::SparseAssignment;
 pub(crate) use warm::ExactState;
-
-/// The largest accepted squared diameter of the two clouds together ([`OtError::SpreadTooLarge`]).
-///
-/// Costs, potentials and the loss are `f64`, finite for any `f32` input
-/// (squared differences of `f32` values stay below 5e77). The gradient
-/// `2 (P_i − Q_σ(i)) / n` is `f32`: `P − Q` is at most the diameter and
-/// `n = 1` doubles it, so it is finite below a diameter of `f32::MAX / 2`;
-/// the bound, `f32::MAX / 4`, leaves a factor 2 for rounding. Without it a
-/// single point 3e38 from its partner got an infinite gradient.
-pub const MAX_DIAMETER_SQ: f64 = (f32::MAX as f64 / 4.0) * (f32::MAX as f64 / 4.0);
-
-/// The clouds' squared diameter, or [`OtError::SpreadTooLarge`] beyond [`MAX_DIAMETER_SQ`].
-pub(crate) fn checked_diameter_sq(
-    source: &PointCloud,
-    target: &PointCloud,
-) -> Result<f64, OtError> {
-    let diam2 = diameter_sq(source, target);
-    check_spread("exact", diam2, 1.0, MAX_DIAMETER_SQ)?;
-    Ok(diam2)
-}
-
-/// Settings of the exact solver.
-#[derive(Debug, Clone, PartialEq)]
-pub struct ExactSettings {
-    /// Clouds smaller than this go to the dense reference solver.
-    pub dense_below: usize,
-    /// Candidate partners per point in the initial sparse graph.
-    pub candidates: usize,
-    /// Violation threshold of the optimality check.
-    pub tolerance: f64,
-    /// The entropic solve that provides potentials and candidates.
-    pub warm_start: SinkhornSettings,
-    /// First ε of the auction, in units of the clouds' squared diameter.
-    pub auction_start: f64,
-    /// Last ε of the auction, before the exact finish, in units of the clouds' squared diameter.
-    pub auction_end: f64,
-    /// First ε of the auctions of a warm-started solve (`crate::warm`), whose
-    /// prices start near the optimum, in units of the clouds' squared diameter.
-    pub warm_auction_start: f64,
-}
-
-impl Default for ExactSettings {
-    fn default() -> Self {
-        Self {
-            dense_below: 64,
-            candidates: 8,
-            tolerance: 1e-11,
-            warm_start: SinkhornSettings {
-                blur: 0.03,
-                scaling: 0.9,
-                marginal_tolerance: 1e-2,
-                max_polish_iterations: 10,
-                max_scale_iterations: 1,
-                annealing_overrelaxation: 1.0,
-                coarse_period: 0,
-                ..SinkhornSettings::default()
-            },
-            // 0.1 and 1e-9 in cost units on clouds of squared diameter 4 (the
-            // benchmark's blobs pairs: 4.4).
-            auction_start: 0.025,
-            auction_end: 2.5e-10,
-            warm_auction_start: 1e-4,
-        }
-    }
-}
-
-impl ExactSettings {
-    /// Always use the sparse solver with its optimality check (used by tests on tiny clouds).
-    pub fn sparse_only() -> Self {
-        Self {
-            dense_below: 0,
-            ..Self::default()
-        }
-    }
-
-    /// Checks every setting against its documented range.
-    pub fn validate(&self) -> Result<(), OtError> {
-        if self.candidates == 0 {
-            return Err(OtError::InvalidSetting {
-                key: "exact.candidates",
-                value: 0.0,
-                reason: "must be at least 1",
-            });
-        }
-        if !self.tolerance.is_finite() || self.tolerance < 0.0 {
-            return Err(OtError::InvalidSetting {
-                key: "exact.tolerance",
-                value: self.tolerance,
-                reason: "must be finite and non-negative",
-            });
-        }
-        let auction_ok = self.auction_end > 0.0
-            && self.auction_start >= self.auction_end
-            && self.auction_start.is_finite();
-        if !auction_ok {
-            return Err(OtError::InvalidSetting {
-                key: "exact.auction_start",
-                value: self.auction_start,
-                reason: "need auction_start >= auction_end > 0",
-            });
-        }
-        if !(self.warm_auction_start >= self.auction_end && self.warm_auction_start.is_finite()) {
-            return Err(OtError::InvalidSetting {
-                key: "exact.warm_auction_start",
-                value: self.warm_auction_start,
-                reason: "need warm_auction_start >= auction_end > 0",
-            });
-        }
-        self.warm_start.validate()
-    }
-}
 
 /// Solves the exact assignment problem from `source` to `target`.
 ///
@@ -417,130 +310,6 @@ pub(crate) fn solve_sorted(
         settings.auction_start,
     )
 }
-
-/// Steps 3–4 of the module doc from a sparse assignment: shortest augmenting
-/// paths, then optimality checks adding violated pairs, until the check finds none.
-///
-/// Any start gives the optimal matching: the loop ends only on a check of all
-/// pairs against the final potentials (rows whose potential did not rise
-/// since an earlier check cannot have gained a violation). `stats` carries
-/// the work done before; re-pricing auctions start at `auction_start` (× diameter²).
-fn finish(
-    x: &Clustered,
-    y: &Clustered,
-    diameter_sq: f64,
-    settings: &ExactSettings,
-    mut lsap: SparseAssignment,
-    mut stats: SolveStats,
-    auction_start: f64,
-) -> SortedAssignment {
-    let n = x.cloud.len();
-    let k = settings.candidates;
-    let mut phases = std::mem::take(&mut stats.phases);
-    let first = stats.iterations;
-    loop {
-        stats.iterations += 1;
-        if stats.iterations > first + 1 && lsap.free_rows().len() * REPRICE_BELOW > n {
-            // Many rows are free (added violated edges unmatch their rows): re-price
-            // all rows by auction from the current prices, far cheaper than one
-            // shortest-augmenting-path search per free row from poor potentials.
-            // (Not on the first round: its prices come fresh from an auction, and
-            // the rows its greedy start leaves free are each a short search.)
-            let (edges, v) = lsap.into_parts();
-            let (v, finished) = phases.time("auction", || {
-                auction_potentials(&edges, v, diameter_sq, auction_start, settings)
-            });
-            stats.auction_budget_stops += usize::from(!finished);
-            lsap = SparseAssignment::new(edges, v);
-        }
-        let augment_start = Instant::now();
-        for i in lsap.free_rows() {
-            if !lsap.augment(i) {
-                let full: Vec<(u32, u32, f64)> = (0..n)
-                    .map(|j| {
-                        (
-                            i as u32,
-                            j as u32,
-                            sq_dist_f64(&x.cloud.point(i), &y.cloud.point(j)),
-                        )
-                    })
-                    .collect();
-                stats.pair_evaluations += n as u64;
-                lsap.add_edges(&full);
-                let matched = lsap.augment(i);
-                debug_assert!(
-                    matched,
-                    "a row with edges to every column always reaches a free column"
-                );
-            }
-        }
-        phases.add("augment", augment_start.elapsed().as_secs_f64());
-        // Optimality check over all pairs; add each row's worst violators and solve again.
-        let rows = lsap.take_raised();
-        let (violations, checked) = phases.time("check", || {
-            violations(
-                x,
-                y,
-                &lsap.u,
-                &lsap.v,
-                settings.tolerance,
-                VIOLATORS_PER_CANDIDATE * k,
-                &rows,
-            )
-        });
-        stats.pair_evaluations += checked;
-        if violations.is_empty() {
-            stats.candidate_pairs = lsap.edge_count();
-            stats.phases = phases;
-            let perm = lsap.permutation();
-            let (edges, u, v) = lsap.into_potentials();
-            return SortedAssignment {
-                perm,
-                u,
-                v,
-                edges,
-                stats,
-            };
-        }
-        stats.added_pairs += violations.len();
-        lsap.add_edges(&violations);
-    }
-}
-
-/// Column potentials from an ε-scaling auction on `edges` started at prices `−v`,
-/// and whether the auction finished.
-///
-/// Its ε runs from `auction_start` to `settings.auction_end` times `diameter_sq` (1 for
-/// clouds of one point repeated, whose costs are all 0).
-///
-/// If a phase runs out of bids the prices reached so far are returned: they
-/// only rose from `−v` and are ε-complementary for every row assigned at
-/// that point, and the exact finish accepts any potentials. The caller counts
-/// the stop in `SolveStats::auction_budget_stops`.
-fn auction_potentials(
-    edges: &[Vec<(u32, f64)>],
-    v: Vec<f64>,
-    diameter_sq: f64,
-    auction_start: f64,
-    settings: &ExactSettings,
-) -> (Vec<f64>, bool) {
-    let unit = if diameter_sq > 0.0 { diameter_sq } else { 1.0 };
-    let mut q: Vec<f64> = v.iter().map(|&t| -t).collect();
-    let finished = auction::run(
-        edges,
-        &mut q,
-        auction_start * unit,
-        settings.auction_end * unit,
-        0.2,
-    );
-    (q.iter().map(|&t| -t).collect(), finished)
-}
-
-/// Each check adds this many times `candidates` worst violators per row (fewer, costlier rounds otherwise).
-const VIOLATORS_PER_CANDIDATE: usize = 4;
-
-/// The sparse solve re-prices every row by auction when more than `n / REPRICE_BELOW` rows are free.
-const REPRICE_BELOW: usize = 16;
 
 /// For each point of `x`, the `k` points of `y` with the smallest `c_ij − pot_j` inside the listed blocks.
 fn best_partners(

@@ -18,7 +18,7 @@ use rayon::prelude::*;
 use super::SortedAssignment;
 use super::check::violations;
 use super::sparse::SparseAssignment;
-use crate::blocks::Clustered;
+use crate::clusters::Clustered;
 use crate::cost::sq_dist_f64;
 
 /// Kept candidate targets per source point, in units of `candidates`.

@@ -16,7 +16,7 @@ use rayon::prelude::*;
 
 use super::coarse::SCALING_TOLERANCE;
 use super::pass::{Level, LogSum};
-use crate::blocks::{fit_potentials, pair_bound};
+use crate::clusters::{fit_potentials, pair_bound};
 use crate::disjoint_sets::DisjointSets;
 
 /// A block pair links two clusters strongly if its plan mass is at least `exp(−WEAK_LINK)` times
@@ -36,7 +36,7 @@ const BRIDGE_MARGIN: f64 = 10.0;
 /// The graph joins source cluster `I` and target cluster `J` where the plan's mass on
 /// `(I, J)` is at least `e^−WEAK_LINK` of the smaller cluster's. A bridge is a block pair
 /// `(I, J)` across components with the upper bound `A_I B_J exp(−b_IJ/ε)` on its mass, where
-/// `b_IJ` is the block bound on reduced costs (`blocks::pair_bound` for the fits of `f, g`)
+/// `b_IJ` is the block bound on reduced costs (`clusters::pair_bound` for the fits of `f, g`)
 /// and `A_I, B_J` the cluster masses. Kept are
 /// the pairs with `b_IJ ≤ b*_ab + BRIDGE_MARGIN · ε`, where `b*_ab` is the cheapest bound
 /// from component `a`'s sources to component `b`'s targets: every ordered pair of components

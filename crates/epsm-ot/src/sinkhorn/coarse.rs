@@ -71,7 +71,7 @@ const SCALING_MEMORY: usize = 8;
 ///
 /// `log_masses[I][k]` is the plan's mass on the block pair `(I, lists[I][k])`
 /// for these `f, g` (from `pass::softmin_blocks`); each `lists[I]` is sorted, as
-/// [`Support`](crate::blocks::Support) keeps them. The roles of the two
+/// [`Support`](crate::clusters::Support) keeps them. The roles of the two
 /// measures are symmetric: a pass over target blocks corrects with `x, f` the
 /// targets. If the cluster scaling does not converge, the problem is lumped per
 /// component of the support graph with bridges between components ([`Lumped`],
@@ -297,7 +297,7 @@ mod tests {
     use super::super::pass::softmin_blocks;
     use super::*;
     use crate::SinkhornSettings;
-    use crate::blocks::{Clustered, Support, fit_potentials};
+    use crate::clusters::{Clustered, Support, fit_potentials};
     use crate::cost::diameter_sq;
     use crate::points::PointCloud;
     use crate::sinkhorn::solve_dual;

@@ -11,7 +11,7 @@
 //!    once per scale: refreshing it before every update gave the same plans
 //!    and cost 4 % more time at n = 16384), each point streaming only the
 //!    kept blocks that its own bound on `c_ij − f_i − g_j` keeps (`pass::Cut`,
-//!    `blocks::PointCut`: 36 % fewer pairs at n = 16384, 37 % at 65536),
+//!    `clusters::PointCut`: 36 % fewer pairs at n = 16384, 37 % at 65536),
 //!    with over-relaxed updates (ω = `annealing_overrelaxation`). A scale
 //!    opens with a target update at its ε whose pass also sums the plan per
 //!    block pair, followed by the two-grid correction of `coarse` (exact
@@ -23,7 +23,7 @@
 //!    pairs at n = 65536). The last scale (`ε = blur²`) continues to
 //!    `min(scale_tolerance, 4 · marginal_tolerance)` before handing over to
 //!    the polish.
-//! 4. **Polish**: full updates `g ← softmin(f)`, `f̃ ← softmin(g)` at the final
+//! 4. **Polish** (`polish.rs`): full updates `g ← softmin(f)`, `f̃ ← softmin(g)` at the final
 //!    `ε`, Anderson-accelerated on `f` (see `anderson`; memory
 //!    `anderson_memory`, mixing `overrelaxation`), until the L1 error of the
 //!    source marginal is at most the tolerance (the target marginal is exact
@@ -34,17 +34,17 @@
 //!    dropped and the loop restarts from the best iterate. A polish that runs
 //!    out of updates first, or stalls (its smallest error falls too slowly to
 //!    reach the tolerance within the updates left, even `stall_margin` times
-//!    faster; see [`stalled`]), ends on one more target update, and the caller
+//!    faster; see `polish::stalled`), ends on one more target update, and the caller
 //!    counts it (`SolveStats::unconverged_solves`) or, for a non-finite
 //!    error, fails (`OtError::NotConverged`).
 
 use rayon::prelude::*;
 
 use super::SinkhornSettings;
-use super::anderson::{Anderson, Guarded};
 use super::coarse;
 use super::pass::{Cut, Level, coarse_cloud, softmin, softmin_blocks};
-use crate::blocks::{Clustered, Support, fit_potentials};
+use super::polish::polish;
+use crate::clusters::{Clustered, Support, fit_potentials};
 use crate::plan::{PhaseTimes, SolveStats};
 
 /// Dual potentials of one entropic problem, in the clusterings' orders.
@@ -112,18 +112,20 @@ pub(crate) fn schedule(diameter_sq: f64, blur: f64, scaling: f64) -> Vec<f64> {
     list
 }
 
-struct Loop<'a> {
-    x: &'a Clustered,
-    y: &'a Clustered,
-    settings: &'a SinkhornSettings,
-    pairs: u64,
-    iterations: usize,
-    guards: Guards,
+/// What the phases of the loop share: the clouds, the settings and the
+/// work done so far.
+pub(super) struct Loop<'a> {
+    pub(super) x: &'a Clustered,
+    pub(super) y: &'a Clustered,
+    pub(super) settings: &'a SinkhornSettings,
+    pub(super) pairs: u64,
+    pub(super) iterations: usize,
+    pub(super) guards: Guards,
 }
 
 impl Loop<'_> {
     /// The block pairs whose reduced-cost bound for `f, g` is at most `threshold`.
-    fn support(&self, f: &[f64], g: &[f64], threshold: f64) -> Support {
+    pub(super) fn support(&self, f: &[f64], g: &[f64], threshold: f64) -> Support {
         let (fit_f, fit_g) = (fit_potentials(self.x, f), fit_potentials(self.y, g));
         Support::truncated(self.x, &fit_f, self.y, &fit_g, threshold)
     }
@@ -344,134 +346,11 @@ pub(crate) fn solve_dual(
     dual
 }
 
-/// Polish: Anderson-accelerated updates at the final ε, from potentials `f, g`, until the source
-/// marginal is within tolerance; `pairs` and `iterations` carry the work done so far.
-pub(crate) fn polish(
-    x: &Clustered,
-    y: &Clustered,
-    mut f: Vec<f64>,
-    mut g: Vec<f64>,
-    settings: &SinkhornSettings,
-    pairs: u64,
-    iterations: usize,
-) -> Dual {
-    let mut lp = Loop {
-        x,
-        y,
-        settings,
-        pairs,
-        iterations,
-        guards: Guards::default(),
-    };
-    let (fx, fy) = (Level::fine(x), Level::fine(y));
-    let start = std::time::Instant::now();
-    let eps = settings.blur * settings.blur;
-    let anderson = Anderson::new(settings.anderson_memory, settings.overrelaxation);
-    let mut guarded = Guarded::new(anderson, &f);
-    let threshold = settings.truncation * eps;
-    let mut support = lp.support(&f, &g, threshold);
-    let mut marginal_error = f64::INFINITY;
-    // `g ← softmin(f)`: the target marginal exact.
-    let target_update = |support: &Support, f: &[f64], g: &[f64]| {
-        softmin(
-            &fy,
-            &fx,
-            &support.cols,
-            f,
-            eps,
-            Some(Cut { own: g, threshold }),
-        )
-    };
-    // The smallest marginal error after each update (NaN ignored), for the stall test.
-    let mut best: Vec<f64> = Vec::new();
-    for round in 0..settings.max_polish_iterations {
-        // One full update from f: g exact for the target marginal, then the source update.
-        let (gt, p1) = target_update(&support, &f, &g);
-        g = gt;
-        let (ft, p2) = softmin(
-            &fx,
-            &fy,
-            &support.rows,
-            &g,
-            eps,
-            Some(Cut { own: &f, threshold }),
-        );
-        lp.pairs += p1 + p2;
-        lp.iterations += 1;
-        marginal_error = row_marginal_error(&f, &ft, eps);
-        if converged(marginal_error, settings.marginal_tolerance) {
-            break;
-        }
-        best.push(
-            best.last()
-                .map_or(marginal_error, |&b| b.min(marginal_error)),
-        );
-        if stalled(&best, settings) {
-            break;
-        }
-        let restarted;
-        (f, restarted) = guarded.step(&f, &ft, marginal_error);
-        if !restarted && round % SUPPORT_REFRESH == SUPPORT_REFRESH - 1 {
-            support = lp.support(&f, &g, threshold);
-        }
-    }
-    if !converged(marginal_error, settings.marginal_tolerance) {
-        // Out of iterations (or a NaN error): f moved after the last g update; make the
-        // target marginal exact again. After a stall (the loop left before its step) f
-        // has not moved, and this repeats the round's g update with the new g as the cut.
-        let (gt, pairs) = target_update(&support, &f, &g);
-        lp.pairs += pairs;
-        g = gt;
-    }
-    let mut phases = PhaseTimes::default();
-    phases.add("polish", start.elapsed().as_secs_f64());
-    Dual {
-        f,
-        g,
-        eps,
-        support,
-        iterations: lp.iterations,
-        pairs: lp.pairs,
-        marginal_error,
-        guards: Guards::default(),
-        phases,
-    }
-}
-
 /// Whether a marginal `error` meets `tolerance`. NaN never does: a NaN error is
 /// "not converged" everywhere (`NaN > tolerance` is false too, so a test written
 /// as "above tolerance" would take a NaN for converged).
 pub(crate) fn converged(error: f64, tolerance: f64) -> bool {
     error <= tolerance
-}
-
-/// Polish iterations between two refreshes of the truncated support.
-const SUPPORT_REFRESH: usize = 8;
-
-/// Updates before the polish's stall test applies (the first updates of an
-/// Anderson polish are too noisy to extrapolate).
-const STALL_MIN_UPDATES: usize = 100;
-
-/// Whether a polish has stalled (see `SinkhornSettings::stall_margin`):
-/// after `best.len()` updates (`best[k]`: the smallest error after update
-/// `k + 1`), whether even `stall_margin` times the rate at which the smallest
-/// error fell over the second half of those updates (per update, in log
-/// error) falls short of reaching `marginal_tolerance` within the updates
-/// left. A polish with no finite error after [`STALL_MIN_UPDATES`] has stalled.
-fn stalled(best: &[f64], settings: &SinkhornSettings) -> bool {
-    let k = best.len();
-    if k < STALL_MIN_UPDATES || settings.stall_margin.is_infinite() {
-        return false;
-    }
-    let now = best[k - 1];
-    if !now.is_finite() {
-        return true;
-    }
-    let half = k / 2;
-    // Infinite when the second half found the first finite error: not stalled.
-    let rate = (best[half - 1] / now).ln() / (k - half) as f64;
-    let left = settings.max_polish_iterations.saturating_sub(k) as f64;
-    (now / settings.marginal_tolerance).ln() > settings.stall_margin * rate * left
 }
 
 /// Over-relaxed update `p ← (1 − ω) p + ω p̃` (Thibault et al. 2017; ω = 1 is plain Sinkhorn).
@@ -482,7 +361,7 @@ fn relax(p: &mut [f64], target: &[f64], omega: f64) {
 }
 
 /// `Σ_i a_i |exp((f_i − f̃_i)/ε) − 1|` with uniform `a_i`, summed in fixed chunks for determinism.
-fn row_marginal_error(f: &[f64], ft: &[f64], eps: f64) -> f64 {
+pub(super) fn row_marginal_error(f: &[f64], ft: &[f64], eps: f64) -> f64 {
     let n = f.len() as f64;
     let parts: Vec<f64> = f
         .par_chunks(4096)
@@ -495,31 +374,4 @@ fn row_marginal_error(f: &[f64], ft: &[f64], eps: f64) -> f64 {
         })
         .collect();
     parts.iter().sum::<f64>() / n
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::synthetic::uniform_cloud;
-
-    #[test]
-    fn a_nan_marginal_error_is_not_converged_and_the_target_marginal_is_restored() {
-        let n = 8;
-        let (Some(a), Some(b)) = (uniform_cloud(n, 1), uniform_cloud(n, 2)) else {
-            panic!("fixture");
-        };
-        // One cluster each: every pass streams all n² pairs.
-        let (x, y) = (Clustered::new(&a, 32), Clustered::new(&b, 32));
-        let settings = SinkhornSettings {
-            max_polish_iterations: 1,
-            ..SinkhornSettings::default()
-        };
-        let mut f = vec![0.0; n];
-        f[3] = f64::NAN;
-        let dual = polish(&x, &y, f, vec![0.0; n], &settings, 0, 0);
-        assert!(dual.marginal_error.is_nan());
-        assert!(!converged(dual.marginal_error, settings.marginal_tolerance));
-        // The round's two updates, then the final target update of the unconverged exit.
-        assert_eq!(dual.pairs, 3 * (n * n) as u64);
-    }
 }

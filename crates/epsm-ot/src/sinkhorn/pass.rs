@@ -1,10 +1,10 @@
 //! One kernel pass over a block support: softmin updates, block masses and barycentres.
 //!
 //! A pass streams, for every point of one measure, the listed target blocks
-//! (consecutive blocks merged into one range) through `kernel::stream_row`,
+//! (consecutive blocks merged into one range) through `softmin::stream_row`,
 //! in parallel over source blocks with a fixed partition, so results do not
 //! depend on the number of threads. With a [`Cut`], each point streams only
-//! the listed blocks its own bound keeps (`blocks::PointCut`).
+//! the listed blocks its own bound keeps (`clusters::PointCut`).
 
 use std::ops::Range;
 
@@ -12,9 +12,9 @@ use rayon::prelude::*;
 
 use super::dual::Dual;
 use crate::OtError;
-use crate::blocks::{Clustered, PointCut, PotentialFit, Selection, fit_potentials, push_merged};
-use crate::kernel::{BlockSums, RowSum, stream_blocks, stream_row};
+use crate::clusters::{Clustered, PointCut, PotentialFit, Selection, fit_potentials, push_merged};
 use crate::points::{Point, PointCloud};
+use crate::softmin::{BlockSums, RowSum, stream_blocks, stream_row};
 
 /// A measure as the kernel sees it: points, their blocks and log-weights.
 pub(super) struct Level<'a> {
@@ -271,7 +271,7 @@ pub(super) struct BlockPass {
 
 /// [`softmin`] of `g`, plus the block masses of the plan whose source potential is `next(i, softmin_i)`.
 ///
-/// The kernel sums each target block separately (`kernel::stream_blocks`), so
+/// The kernel sums each target block separately (`softmin::stream_blocks`), so
 /// one pass gives both the update and the coarse correction's matrix.
 pub(super) fn softmin_blocks(
     x: &Level,
@@ -396,7 +396,7 @@ impl LogSum {
 mod tests {
     use super::*;
     use crate::SinkhornSettings;
-    use crate::blocks::Support;
+    use crate::clusters::Support;
     use crate::cost::diameter_sq;
     use crate::sinkhorn::solve_dual;
     use crate::synthetic::blobs_pair;

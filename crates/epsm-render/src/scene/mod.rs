@@ -7,18 +7,15 @@
 //! Moving one object with [`Scene::set_object_transform`] refits only the top
 //! level of the BVH and that object's emitter table.
 
-pub mod desc;
-pub mod import;
-pub mod load;
+#[cfg(test)]
+pub(crate) mod load;
 pub mod mesh;
-pub mod shapes;
 
 use std::path::PathBuf;
 use std::sync::Arc;
 
 use glam::{DAffine3, DVec3, Vec3};
 
-pub use load::{Loaded, load_file, load_parts, load_scene, parts_from_str};
 pub use mesh::Mesh;
 
 use crate::bvh::Accel;

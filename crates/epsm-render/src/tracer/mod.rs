@@ -3,7 +3,7 @@
 //! over tiles, and optional path recording.
 //!
 //! Determinism: every random number comes from a
-//! [`PixelSampler`], keyed by
+//! [`PixelSampler`](crate::sampler::PixelSampler), keyed by
 //! `(seed, pixel, sample, dimension)`, and each pixel sums its samples in
 //! order, so an image is bit-identical whatever the thread count.
 //!
@@ -21,25 +21,21 @@
 //! from the scalar one, which is also the reference the wide loop is tested
 //! against (`tests/wide.rs`: every shipped scene byte for byte).
 
-use std::time::Instant;
-
-use glam::{UVec2, Vec2, Vec3};
+use glam::{UVec2, Vec3};
 use rayon::prelude::*;
 
 mod path;
+mod tiles;
 #[cfg(target_arch = "x86_64")]
 mod wide;
 
-use path::{Recording, trace_path};
+use tiles::{camera_sample, render_tiles, trace_pixel_sample};
 
-#[cfg(target_arch = "x86_64")]
-use crate::bvh::Avx2;
-use crate::bvh::{BoxTest, Portable, SpheresFirst};
-use crate::camera::FilmRays;
+use crate::bvh::Portable;
 use crate::film::Image;
 use crate::ray::Ray;
-use crate::record::{PathRecord, RecordLevel, SampleDrop};
-use crate::sampler::{PixelKeys, PixelSampler};
+use crate::record::{PathRecord, RecordLevel};
+use crate::sampler::PixelKeys;
 use crate::scene::Scene;
 
 /// Side of the square tiles rendered by one task.
@@ -100,7 +96,7 @@ pub struct TraceCounters {
     /// Shadow rays traced.
     pub shadow_rays: u64,
     /// Samples whose radiance was NaN or infinite (dropped: zero in the
-    /// image, and a record marked [`SampleDrop::NonFinite`]).
+    /// image, and a record marked [`SampleDrop::NonFinite`](crate::record::SampleDrop::NonFinite)).
     pub non_finite: u64,
     /// Paths ended because the sampled direction lay on the wrong side of the
     /// geometric normal for its lobe (shading-normal light leak).
@@ -262,7 +258,7 @@ impl Kernel {
         match self {
             Self::Fastest => Backend::fastest(),
             Self::Avx512 => Avx512::detect().map(Backend::Avx512),
-            Self::Avx2 => Avx2::detect().map(Backend::Avx2),
+            Self::Avx2 => crate::bvh::Avx2::detect().map(Backend::Avx2),
             Self::Portable => Some(Backend::Portable(Portable)),
             Self::Scalar => None,
         }
@@ -352,296 +348,10 @@ pub fn trace_samples(
         .collect()
 }
 
-/// Renders the tiles in parallel: the image, with the records at `level`,
-/// and with `log` the rays cast; by the wide tracer where `kernel` names
-/// one (images only: no records, no ray log).
-fn render_tiles(
-    scene: &Scene,
-    opts: &RenderOptions,
-    level: Option<RecordLevel>,
-    kernel: Kernel,
-    log: bool,
-    progress: &(dyn Fn(u64) + Sync),
-) -> (RenderOutput, Vec<PathRecord>, RayLog) {
-    let start = Instant::now();
-    let (w, h) = (scene.camera().width, scene.camera().height);
-    let (tx, ty) = (w.div_ceil(TILE), h.div_ceil(TILE));
-    #[cfg(target_arch = "x86_64")]
-    let wide = (level.is_none() && !log && opts.spp > 0)
-        .then(|| kernel.backend())
-        .flatten()
-        .map(|backend| wide::WideTracer::new(scene, backend));
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = kernel;
-    let mut tiles: Vec<TileOutput> = (0..tx * ty)
-        .into_par_iter()
-        .map(|t| {
-            let tile = UVec2::new(t % tx, t / tx);
-            #[cfg(target_arch = "x86_64")]
-            if let Some(wide) = &wide {
-                let out = wide.render_tile(scene, opts, tile);
-                progress(out.pixels.len() as u64 * opts.spp as u64);
-                return out;
-            }
-            let out = render_tile(scene, opts, level, log, tile);
-            progress(out.pixels.len() as u64 * opts.spp as u64);
-            out
-        })
-        .collect();
-    let mut image = Image::new(w, h);
-    let mut counters = TraceCounters::default();
-    let mut records = Vec::new();
-    let mut rays = RayLog::default();
-    for tile in &mut tiles {
-        rays.append(&mut tile.rays);
-        counters.add(&tile.counters);
-        for (pixel, value) in &tile.pixels {
-            image.set(pixel.x, pixel.y, *value);
-        }
-    }
-    if level.is_some() {
-        let mut all: Vec<PathRecord> = tiles.into_iter().flat_map(|t| t.records).collect();
-        all.sort_by_key(|r| (r.pixel.y, r.pixel.x, r.sample));
-        records = all;
-    }
-    let samples = w as u64 * h as u64 * opts.spp as u64;
-    (
-        RenderOutput {
-            image,
-            samples,
-            seconds: start.elapsed().as_secs_f64(),
-            counters,
-        },
-        records,
-        rays,
-    )
-}
-
 struct TileOutput {
     pixels: Vec<(UVec2, Vec3)>,
     records: Vec<PathRecord>,
     counters: TraceCounters,
     /// The rays cast, when logged.
     rays: RayLog,
-}
-
-/// Renders one tile, with the AVX2 build of the tracer (and AVX box tests)
-/// where the CPU has it; with `log`, with the portable build and every ray
-/// cast logged (the same image: module docs of `bvh::node`). A scene that
-/// lists exact spheres gets the build that tests them before each walk
-/// ([`SpheresFirst`]; the same hits).
-#[allow(unsafe_code)]
-fn render_tile(
-    scene: &Scene,
-    opts: &RenderOptions,
-    level: Option<RecordLevel>,
-    log: bool,
-    tile: UVec2,
-) -> TileOutput {
-    if log {
-        let mut rays = RayLog::default();
-        let out = render_tile_body(scene, opts, level, tile, &mut rays, Portable);
-        return TileOutput { rays, ..out };
-    }
-    let spheres = scene.accel().lists_spheres();
-    #[cfg(target_arch = "x86_64")]
-    if let Some(avx2) = Avx2::detect() {
-        let avx = avx2.boxes();
-        // SAFETY: `render_tile_avx2` only requires the CPU features it
-        // enables, and an `Avx2` exists only on a CPU found to have each of
-        // them (AVX2 implies the AVX and SSE levels below it).
-        return unsafe {
-            if spheres {
-                render_tile_avx2(scene, opts, level, tile, SpheresFirst(avx))
-            } else {
-                render_tile_avx2(scene, opts, level, tile, avx)
-            }
-        };
-    }
-    if spheres {
-        render_tile_body(
-            scene,
-            opts,
-            level,
-            tile,
-            &mut NoSink,
-            SpheresFirst(Portable),
-        )
-    } else {
-        render_tile_body(scene, opts, level, tile, &mut NoSink, Portable)
-    }
-}
-
-/// [`render_tile_body`] compiled for AVX2 and the bit-manipulation
-/// extensions every AVX2 CPU has: the tracer's hot functions are
-/// `#[inline(always)]`, so they are compiled here with VEX-encoded vector
-/// instructions (three-operand forms, fewer register copies) and single
-/// instructions for the traversal's bit scans and counts (about 10 % fewer
-/// instructions per sample on `scenes/caustic-box.toml`). No fused
-/// multiply-add is enabled, so every operation rounds as in the baseline
-/// build and images are bit-identical on CPUs with and without AVX2.
-/// `boxes` are the AVX tests, [`SpheresFirst`] or not.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
-fn render_tile_avx2(
-    scene: &Scene,
-    opts: &RenderOptions,
-    level: Option<RecordLevel>,
-    tile: UVec2,
-    boxes: impl BoxTest,
-) -> TileOutput {
-    render_tile_body(scene, opts, level, tile, &mut NoSink, boxes)
-}
-
-/// Renders one tile, box tests by `boxes`, every ray cast reported to `sink`.
-#[inline(always)]
-fn render_tile_body(
-    scene: &Scene,
-    opts: &RenderOptions,
-    level: Option<RecordLevel>,
-    tile: UVec2,
-    sink: &mut impl RaySink,
-    boxes: impl BoxTest,
-) -> TileOutput {
-    let (w, h) = (scene.camera().width, scene.camera().height);
-    let film_rays = scene.camera().film_rays();
-    let mut out = TileOutput {
-        pixels: Vec::new(),
-        records: Vec::new(),
-        counters: TraceCounters::default(),
-        rays: RayLog::default(),
-    };
-    for y in tile.y * TILE..((tile.y + 1) * TILE).min(h) {
-        for x in tile.x * TILE..((tile.x + 1) * TILE).min(w) {
-            let pixel = UVec2::new(x, y);
-            let keys = PixelKeys::new(opts.seed, y * w + x, opts.spp);
-            let mut sum = Vec3::ZERO;
-            let mut camera = camera_sample(&film_rays, &keys, pixel, 0);
-            for s in 0..opts.spp {
-                // The next sample's camera ray is made before this sample's
-                // path is traced: it does not depend on the path, and made
-                // after it, its latency (hashes, a normalisation) would
-                // follow the path's last branch.
-                let current = camera;
-                if s + 1 < opts.spp {
-                    camera = camera_sample(&film_rays, &keys, pixel, s + 1);
-                }
-                let l = match level {
-                    Some(level) => {
-                        let mut rec = PathRecord::default();
-                        let l = trace_pixel_sample(
-                            scene,
-                            opts,
-                            current,
-                            Some((level, &mut rec)),
-                            &mut out.counters,
-                            sink,
-                            boxes,
-                        );
-                        out.records.push(rec);
-                        l
-                    }
-                    None => trace_pixel_sample(
-                        scene,
-                        opts,
-                        current,
-                        None,
-                        &mut out.counters,
-                        sink,
-                        boxes,
-                    ),
-                };
-                sum += l;
-            }
-            out.pixels.push((pixel, sum / opts.spp as f32));
-        }
-    }
-    out
-}
-
-/// A pixel sample: which it is, its random stream, where it falls on the
-/// film (pixel units) and its camera ray ([`camera_sample`]).
-#[derive(Clone, Copy)]
-struct CameraSample<'a> {
-    pixel: UVec2,
-    sample: u32,
-    sampler: PixelSampler<'a>,
-    film: Vec2,
-    ray: Ray,
-}
-
-/// Sample `sample` of `pixel`: its stream (the pixel's `keys`), film
-/// position and camera ray (by `film_rays`).
-#[inline(always)]
-fn camera_sample<'a>(
-    film_rays: &FilmRays,
-    keys: &'a PixelKeys,
-    pixel: UVec2,
-    sample: u32,
-) -> CameraSample<'a> {
-    let sampler = keys.sampler(sample);
-    let film = pixel.as_vec2() + sampler.get_2d(DIM_FILM);
-    CameraSample {
-        pixel,
-        sample,
-        sampler,
-        film,
-        ray: film_rays.ray(film),
-    }
-}
-
-/// Traces a pixel sample from its [`camera_sample`] (box tests by `boxes`,
-/// rays reported to `sink`); returns its radiance (zero, counted, and its
-/// record marked dropped, when it was not finite).
-#[inline(always)]
-fn trace_pixel_sample(
-    scene: &Scene,
-    opts: &RenderOptions,
-    CameraSample {
-        pixel,
-        sample,
-        sampler,
-        film,
-        ray,
-    }: CameraSample<'_>,
-    record: Option<(RecordLevel, &mut PathRecord)>,
-    counters: &mut TraceCounters,
-    sink: &mut impl RaySink,
-    boxes: impl BoxTest,
-) -> Vec3 {
-    let mut rec = record.map(|(level, rec)| {
-        *rec = PathRecord {
-            pixel,
-            sample,
-            film,
-            ..PathRecord::default()
-        };
-        Recording {
-            level,
-            rec,
-            done: false,
-        }
-    });
-    let l = trace_path(
-        scene,
-        opts,
-        ray,
-        &sampler,
-        rec.as_mut(),
-        counters,
-        sink,
-        boxes,
-    );
-    if l.is_finite() {
-        if let Some(r) = rec {
-            r.rec.radiance = l;
-        }
-        l
-    } else {
-        counters.non_finite += 1;
-        if let Some(r) = rec {
-            r.rec.drop_sample(SampleDrop::NonFinite);
-        }
-        Vec3::ZERO
-    }
 }

@@ -24,8 +24,8 @@ use std::time::Instant;
 
 use epsm_core::{DiffPath, Motion, ParamTable, PathKind, SolveSettings, classify, solve_adjoint};
 use epsm_render::record::RecordLevel;
-use epsm_render::scene::load::load_scene;
 use epsm_render::tracer::{PixelSample, RenderOptions, trace_samples};
+use epsm_scene::load::load_scene;
 use glam::{DVec2, UVec2};
 use rayon::prelude::*;
 

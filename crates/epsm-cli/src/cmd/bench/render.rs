@@ -5,8 +5,8 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use epsm_render::scene::load::{MAX_DEPTH, load_scene};
 use epsm_render::tracer::{Kernel, RenderOptions, render_with};
+use epsm_scene::load::{MAX_DEPTH, load_scene};
 
 use super::rays::cpu_seconds;
 

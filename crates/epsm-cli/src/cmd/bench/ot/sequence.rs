@@ -105,7 +105,7 @@ struct Sequence {
 
 impl Sequence {
     fn load(args: &SequenceArgs, side: u32) -> anyhow::Result<Self> {
-        let mut parts = epsm_render::scene::load_parts(&args.scene)
+        let mut parts = epsm_scene::load_parts(&args.scene)
             .with_context(|| format!("loading {}", args.scene.display()))?;
         parts.camera.width = side;
         parts.camera.height = side;

@@ -63,7 +63,7 @@ pub fn random_rays(n: usize, lo: DVec3, hi: DVec3) -> Vec<Ray> {
 /// radially by ±10 % of sines.
 pub fn bumpy_sphere(triangles: usize) -> Mesh {
     let k = ((triangles as f64 / 20.0).sqrt().round() as u32).max(1);
-    let ico = epsm_render::scene::shapes::icosahedron();
+    let ico = epsm_scene::shapes::icosahedron();
     let v = &ico.positions;
     let displace = |p: Vec3| {
         let d = p.normalize();

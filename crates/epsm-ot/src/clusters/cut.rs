@@ -1,0 +1,291 @@
+//! The per-point cut of a kept block pair (the second inequality of the
+//! parent module): which target blocks one source point keeps, as merged
+//! ranges.
+
+use std::ops::Range;
+
+use super::{Clustered, PotentialFit};
+use crate::cpu::{Simd, simd};
+use crate::points::{DIM, Point};
+
+/// The point-to-block bound of the module doc for a list of target blocks, as
+/// `f32` columns so the test of one point against every block vectorises.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct PointCut {
+    centroid: [Vec<f32>; DIM],
+    /// Slope `a` of the target potential's fit.
+    slope: [Vec<f32>; DIM],
+    radius: Vec<f32>,
+    /// `ḡ + max r^g`.
+    offset: Vec<f32>,
+    /// The blocks' point ranges.
+    ranges: Vec<Range<usize>>,
+    /// Bit `k`: block `k` starts where block `k − 1` ends (layout of [`Selection`]'s bits).
+    continues: Vec<u64>,
+}
+
+/// What [`PointCut::select`] kept for one point.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Selection {
+    /// Scratch: whether each block of the list is kept.
+    keep: Vec<bool>,
+    /// Bit `k % 64` of word `k / 64`: block `k` of the list is kept.
+    bits: Vec<u64>,
+    /// The kept blocks' ranges, consecutive blocks merged.
+    pub ranges: Vec<Range<usize>>,
+}
+
+impl Selection {
+    /// Every one of `n` blocks kept, whose merged ranges are `ranges`.
+    pub fn all(n: usize, ranges: Vec<Range<usize>>) -> Self {
+        let mut bits = vec![u64::MAX; n / 64];
+        if !n.is_multiple_of(64) {
+            bits.push((1u64 << (n % 64)) - 1);
+        }
+        Self {
+            keep: Vec::new(),
+            bits,
+            ranges,
+        }
+    }
+
+    /// Positions in the list of the kept blocks, in increasing order.
+    pub fn kept(&self) -> impl Iterator<Item = usize> + '_ {
+        set_bits(&self.bits)
+    }
+}
+
+/// Positions of the set bits of a bit vector, in increasing order.
+fn set_bits(words: &[u64]) -> impl Iterator<Item = usize> + '_ {
+    words
+        .iter()
+        .enumerate()
+        .flat_map(|(w, &word)| word_bits(w, word))
+}
+
+/// Positions of the set bits of `word`, the `w`-th word of a bit vector, in increasing order.
+fn word_bits(w: usize, word: u64) -> impl Iterator<Item = usize> {
+    let mut rest = word;
+    std::iter::from_fn(move || {
+        (rest != 0).then(|| {
+            let k = rest.trailing_zeros() as usize;
+            rest &= rest - 1;
+            64 * w + k
+        })
+    })
+}
+
+impl PointCut {
+    /// The bounds of `clustered`'s blocks listed in `list`, in that order, from the fits of its potential.
+    pub fn gather(clustered: &Clustered, fits: &[PotentialFit], list: &[u32]) -> Self {
+        let with = || Vec::with_capacity(list.len());
+        let mut cut = Self {
+            centroid: std::array::from_fn(|_| with()),
+            slope: std::array::from_fn(|_| with()),
+            radius: with(),
+            offset: with(),
+            ranges: Vec::with_capacity(list.len()),
+            continues: vec![0; list.len().div_ceil(64)],
+        };
+        for &j in list {
+            let (c, fit) = (&clustered.clusters[j as usize], &fits[j as usize]);
+            for d in 0..DIM {
+                cut.centroid[d].push(c.centroid[d] as f32);
+                cut.slope[d].push(fit.slope[d] as f32);
+            }
+            // Cover the rounding of the centroid to f32.
+            let shift = c.centroid.iter().fold(0.0f64, |m, v| m.max(v.abs())) * 1e-6;
+            cut.radius.push((c.radius + shift) as f32);
+            cut.offset.push((fit.mean + fit.max_residual) as f32);
+            let k = cut.ranges.len();
+            if cut.ranges.last().is_some_and(|r| r.end == c.range.start) {
+                cut.continues[k / 64] |= 1 << (k % 64);
+            }
+            cut.ranges.push(c.range.clone());
+        }
+        cut
+    }
+
+    /// Keeps the blocks whose bound on `c(x, y_j) − g_j` may be at most `limit`, and
+    /// returns whether there is any (the caller decides what a point that keeps none streams).
+    ///
+    /// Conservative under `f32` rounding: a block is dropped only if its bound
+    /// exceeds `limit` by more than [`CUT_ROUNDING`] times the magnitudes
+    /// involved, far above the accumulated rounding of these few operations,
+    /// so potentials of any size (clouds far apart) never cut a pair they should not.
+    pub fn select(&self, x: &Point, limit: f32, out: &mut Selection) -> bool {
+        match simd() {
+            #[cfg(target_arch = "x86_64")]
+            #[allow(unsafe_code)]
+            // SAFETY: `select_avx512` only requires the four AVX-512 subsets it is
+            // compiled for, which `simd` detected on the running CPU; it is the same
+            // safe code as `select_portable`.
+            Simd::Avx512 => unsafe { self.select_avx512(x, limit, out) },
+            #[cfg(target_arch = "x86_64")]
+            #[allow(unsafe_code)]
+            // SAFETY: `select_avx2` only requires AVX2 and FMA, which `simd` detected
+            // on the running CPU; it is the same safe code as `select_portable`.
+            Simd::Avx2 => unsafe { self.select_avx2(x, limit, out) },
+            _ => self.select_portable(x, limit, out),
+        }
+        !out.ranges.is_empty()
+    }
+
+    /// [`Self::select_portable`] compiled for AVX-512 (selected at run time).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f,avx512bw,avx512dq,avx512vl")]
+    fn select_avx512(&self, x: &Point, limit: f32, out: &mut Selection) {
+        self.select_portable(x, limit, out);
+    }
+
+    /// [`Self::select_portable`] compiled for AVX2 (selected at run time).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    fn select_avx2(&self, x: &Point, limit: f32, out: &mut Selection) {
+        self.select_portable(x, limit, out);
+    }
+
+    /// The body of [`Self::select`]: a vectorisable test, then a branch-free compaction.
+    #[inline(always)]
+    fn select_portable(&self, x: &Point, limit: f32, out: &mut Selection) {
+        let n = self.ranges.len();
+        out.keep.resize(n, false);
+        let keep = &mut out.keep[..n];
+        let [c0, c1, c2, c3, c4] = &self.centroid;
+        let (c0, c1, c2, c3, c4) = (&c0[..n], &c1[..n], &c2[..n], &c3[..n], &c4[..n]);
+        let [a0, a1, a2, a3, a4] = &self.slope;
+        let (a0, a1, a2, a3, a4) = (&a0[..n], &a1[..n], &a2[..n], &a3[..n], &a4[..n]);
+        let (radius, offset) = (&self.radius[..n], &self.offset[..n]);
+        for k in 0..n {
+            let d = [
+                x[0] - c0[k],
+                x[1] - c1[k],
+                x[2] - c2[k],
+                x[3] - c3[k],
+                x[4] - c4[k],
+            ];
+            let t = [
+                2.0 * d[0] + a0[k],
+                2.0 * d[1] + a1[k],
+                2.0 * d[2] + a2[k],
+                2.0 * d[3] + a3[k],
+                2.0 * d[4] + a4[k],
+            ];
+            let dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2] + d[3] * d[3] + d[4] * d[4];
+            let tt = t[0] * t[0] + t[1] * t[1] + t[2] * t[2] + t[3] * t[3] + t[4] * t[4];
+            let tilt = tt.sqrt() * radius[k];
+            let slack = CUT_ROUNDING * (dd + tilt + offset[k].abs() + limit.abs());
+            keep[k] = dd - tilt - offset[k] <= limit + slack;
+        }
+        // Bit masks: a kept block opens a range unless it joins the previous kept block
+        // (continues it), and closes it unless the next block joins it.
+        out.bits.clear();
+        out.bits.extend(keep.chunks(64).map(|chunk| {
+            let mut word = 0u64;
+            for (k, &v) in chunk.iter().enumerate() {
+                word |= u64::from(v) << k;
+            }
+            word
+        }));
+        let words = &out.bits;
+        let joins = |w: usize| {
+            let previous = (words[w] << 1) | if w > 0 { words[w - 1] >> 63 } else { 0 };
+            words[w] & previous & self.continues[w]
+        };
+        let opens = |w: usize| words[w] & !joins(w);
+        let closes = |w: usize| {
+            let joined = (joins(w) >> 1)
+                | if w + 1 < words.len() {
+                    joins(w + 1) << 63
+                } else {
+                    0
+                };
+            words[w] & !joined
+        };
+        out.ranges.clear();
+        let starts = (0..words.len()).flat_map(|w| word_bits(w, opens(w)));
+        out.ranges.extend(starts.map(|k| self.ranges[k].start..0));
+        let ends = (0..words.len()).flat_map(|w| word_bits(w, closes(w)));
+        for (r, k) in out.ranges.iter_mut().zip(ends) {
+            r.end = self.ranges[k].end;
+        }
+    }
+}
+
+/// Appends `r` to `out`, extending the last range instead if `r` continues it.
+pub(crate) fn push_merged(out: &mut Vec<Range<usize>>, r: Range<usize>) {
+    match out.last_mut() {
+        Some(last) if last.end == r.start => last.end = r.end,
+        _ => out.push(r),
+    }
+}
+
+/// Relative slack of [`PointCut::select`]: about 60 `f32` roundings.
+const CUT_ROUNDING: f32 = 4e-6;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::clusters::fit_potentials;
+    use crate::points::PointCloud;
+    use crate::synthetic::{Rng, blobs_pair};
+    use crate::tests::translated;
+
+    /// Every block holding a pair with `c(x, y_j) − g_j ≤ limit` is kept and the ranges are
+    /// the kept blocks' merged; with `drops`, most blocks are dropped (the check is not vacuous).
+    fn check_cut(source: &PointCloud, target: &PointCloud, slope: f64, drops: bool) {
+        let (x, y) = (Clustered::new(source, 16), Clustered::new(target, 16));
+        let mut rng = Rng::new(5);
+        // A smooth tilt plus noise of the size of the kernel width: the kind of potential a plan has.
+        let g: Vec<f64> = (0..y.cloud.len())
+            .map(|j| slope * f64::from(y.cloud.point(j)[3]) + 0.01 * f64::from(rng.uniform()))
+            .collect();
+        let fits = fit_potentials(&y, &g);
+        let list: Vec<u32> = (0..y.clusters.len() as u32).collect();
+        let cut = PointCut::gather(&y, &fits, &list);
+        let mut selection = Selection::default();
+        let (mut kept, mut total) = (0, 0);
+        for i in (0..x.cloud.len()).step_by(7) {
+            let p = x.cloud.point(i);
+            let reduced = |j: usize| {
+                let q = y.cloud.point(j);
+                let c: f64 = (0..DIM).map(|d| f64::from(p[d] - q[d]).powi(2)).sum();
+                c - g[j]
+            };
+            let best = (0..y.cloud.len())
+                .map(reduced)
+                .fold(f64::INFINITY, f64::min);
+            let limit = best + 30.0 * 1e-4;
+            cut.select(&p, limit as f32, &mut selection);
+            let chosen: Vec<usize> = selection.kept().collect();
+            for (k, c) in y.clusters.iter().enumerate() {
+                let needed = c.range.clone().any(|j| reduced(j) <= limit);
+                assert!(
+                    !needed || chosen.contains(&k),
+                    "point {i}: block {k} dropped"
+                );
+            }
+            let mut merged = Vec::new();
+            for &k in &chosen {
+                push_merged(&mut merged, y.clusters[k].range.clone());
+            }
+            assert_eq!(selection.ranges, merged, "point {i}");
+            kept += chosen.len();
+            total += list.len();
+        }
+        assert!(
+            !drops || kept * 4 < total,
+            "vacuous: {kept} of {total} blocks kept"
+        );
+    }
+
+    #[test]
+    fn point_cut_keeps_every_block_with_a_pair_below_the_limit() {
+        let (s, t) = blobs_pair(2048, 9).unwrap_or_else(|| panic!("fixture"));
+        check_cut(&s, &t, 0.3, true);
+        // Far apart: costs and potentials of size 1e6, whose f32 rounding alone exceeds
+        // 30ε; the slack then keeps every block (no cut, but no wrong one either).
+        let far = translated(&t, [0.0, 0.0, 0.0, 1000.0, 0.0]);
+        check_cut(&s, &far, 2000.0, false);
+    }
+}

@@ -1,0 +1,136 @@
+//! Steps 3–4 of the solver (module doc of [`super`]): augmenting paths on
+//! the candidate graph, then optimality checks over all pairs adding the
+//! violated ones, re-pricing by auction when many rows are free.
+
+use std::time::Instant;
+
+use super::check::violations;
+use super::sparse::SparseAssignment;
+use super::{ExactSettings, SortedAssignment, auction};
+use crate::clusters::Clustered;
+use crate::cost::sq_dist_f64;
+use crate::plan::SolveStats;
+
+/// Steps 3–4 of the module doc from a sparse assignment: shortest augmenting
+/// paths, then optimality checks adding violated pairs, until the check finds none.
+///
+/// Any start gives the optimal matching: the loop ends only on a check of all
+/// pairs against the final potentials (rows whose potential did not rise
+/// since an earlier check cannot have gained a violation). `stats` carries
+/// the work done before; re-pricing auctions start at `auction_start` (× diameter²).
+pub(super) fn finish(
+    x: &Clustered,
+    y: &Clustered,
+    diameter_sq: f64,
+    settings: &ExactSettings,
+    mut lsap: SparseAssignment,
+    mut stats: SolveStats,
+    auction_start: f64,
+) -> SortedAssignment {
+    let n = x.cloud.len();
+    let k = settings.candidates;
+    let mut phases = std::mem::take(&mut stats.phases);
+    let first = stats.iterations;
+    loop {
+        stats.iterations += 1;
+        if stats.iterations > first + 1 && lsap.free_rows().len() * REPRICE_BELOW > n {
+            // Many rows are free (added violated edges unmatch their rows): re-price
+            // all rows by auction from the current prices, far cheaper than one
+            // shortest-augmenting-path search per free row from poor potentials.
+            // (Not on the first round: its prices come fresh from an auction, and
+            // the rows its greedy start leaves free are each a short search.)
+            let (edges, v) = lsap.into_parts();
+            let (v, finished) = phases.time("auction", || {
+                auction_potentials(&edges, v, diameter_sq, auction_start, settings)
+            });
+            stats.auction_budget_stops += usize::from(!finished);
+            lsap = SparseAssignment::new(edges, v);
+        }
+        let augment_start = Instant::now();
+        for i in lsap.free_rows() {
+            if !lsap.augment(i) {
+                let full: Vec<(u32, u32, f64)> = (0..n)
+                    .map(|j| {
+                        (
+                            i as u32,
+                            j as u32,
+                            sq_dist_f64(&x.cloud.point(i), &y.cloud.point(j)),
+                        )
+                    })
+                    .collect();
+                stats.pair_evaluations += n as u64;
+                lsap.add_edges(&full);
+                let matched = lsap.augment(i);
+                debug_assert!(
+                    matched,
+                    "a row with edges to every column always reaches a free column"
+                );
+            }
+        }
+        phases.add("augment", augment_start.elapsed().as_secs_f64());
+        // Optimality check over all pairs; add each row's worst violators and solve again.
+        let rows = lsap.take_raised();
+        let (violations, checked) = phases.time("check", || {
+            violations(
+                x,
+                y,
+                &lsap.u,
+                &lsap.v,
+                settings.tolerance,
+                VIOLATORS_PER_CANDIDATE * k,
+                &rows,
+            )
+        });
+        stats.pair_evaluations += checked;
+        if violations.is_empty() {
+            stats.candidate_pairs = lsap.edge_count();
+            stats.phases = phases;
+            let perm = lsap.permutation();
+            let (edges, u, v) = lsap.into_potentials();
+            return SortedAssignment {
+                perm,
+                u,
+                v,
+                edges,
+                stats,
+            };
+        }
+        stats.added_pairs += violations.len();
+        lsap.add_edges(&violations);
+    }
+}
+
+/// Column potentials from an ε-scaling auction on `edges` started at prices `−v`,
+/// and whether the auction finished.
+///
+/// Its ε runs from `auction_start` to `settings.auction_end` times `diameter_sq` (1 for
+/// clouds of one point repeated, whose costs are all 0).
+///
+/// If a phase runs out of bids the prices reached so far are returned: they
+/// only rose from `−v` and are ε-complementary for every row assigned at
+/// that point, and the exact finish accepts any potentials. The caller counts
+/// the stop in `SolveStats::auction_budget_stops`.
+pub(super) fn auction_potentials(
+    edges: &[Vec<(u32, f64)>],
+    v: Vec<f64>,
+    diameter_sq: f64,
+    auction_start: f64,
+    settings: &ExactSettings,
+) -> (Vec<f64>, bool) {
+    let unit = if diameter_sq > 0.0 { diameter_sq } else { 1.0 };
+    let mut q: Vec<f64> = v.iter().map(|&t| -t).collect();
+    let finished = auction::run(
+        edges,
+        &mut q,
+        auction_start * unit,
+        settings.auction_end * unit,
+        0.2,
+    );
+    (q.iter().map(|&t| -t).collect(), finished)
+}
+
+/// Each check adds this many times `candidates` worst violators per row (fewer, costlier rounds otherwise).
+pub(super) const VIOLATORS_PER_CANDIDATE: usize = 4;
+
+/// The sparse solve re-prices every row by auction when more than `n / REPRICE_BELOW` rows are free.
+const REPRICE_BELOW: usize = 16;

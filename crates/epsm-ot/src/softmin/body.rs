@@ -1,0 +1,253 @@
+//! The per-block body of a soft-min row: scores into a stack buffer, then
+//! maximum, exponentials and sum in fixed-order lanes. Plain loops only: the
+//! body is inlined into each SIMD-compiled copy of the row (see the parent
+//! module).
+
+use std::ops::Range;
+
+use super::exp::exp_nonpositive;
+use super::{BLOCK, BlockSums, LANES, RowSum};
+use crate::points::{DIM, Point};
+
+/// Scores `lw_j + (g_j − c(x, y_j))·inv_eps` of the targets `range` into `out` (as long as
+/// `range`) and, if `COSTS`, the costs `c(x, y_j)` into `costs` (as long as `range`; unused
+/// otherwise).
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn score_into<const COSTS: bool>(
+    x: &Point,
+    y: &[Vec<f32>; DIM],
+    lw: &[f32],
+    g: &[f32],
+    inv_eps: f32,
+    range: Range<usize>,
+    out: &mut [f32],
+    costs: &mut [f32],
+) {
+    let (c0, c1, c2, c3, c4) = (
+        &y[0][range.clone()],
+        &y[1][range.clone()],
+        &y[2][range.clone()],
+        &y[3][range.clone()],
+        &y[4][range.clone()],
+    );
+    let (lws, gs) = (&lw[range.clone()], &g[range]);
+    for k in 0..out.len() {
+        let d0 = x[0] - c0[k];
+        let d1 = x[1] - c1[k];
+        let d2 = x[2] - c2[k];
+        let d3 = x[3] - c3[k];
+        let d4 = x[4] - c4[k];
+        let c = d0 * d0 + d1 * d1 + d2 * d2 + d3 * d3 + d4 * d4;
+        if COSTS {
+            costs[k] = c;
+        }
+        out[k] = lws[k] + (gs[k] - c) * inv_eps;
+    }
+}
+
+/// [`stream_row`] without moments: scores of consecutive ranges fill one
+/// [`BLOCK`]-long buffer, reduced (maximum, exponentials, sum) once it is
+/// full, so many short ranges cost no more per pair than one long one.
+#[inline(always)]
+pub(super) fn gathered_sum(
+    x: &Point,
+    y: &[Vec<f32>; DIM],
+    lw: &[f32],
+    g: &[f32],
+    inv_eps: f32,
+    ranges: &[Range<usize>],
+    acc: &mut RowSum,
+) -> u64 {
+    let mut scores = [f32::NEG_INFINITY; BLOCK];
+    let mut fill = 0;
+    let mut pairs = 0;
+    for range in ranges {
+        let mut start = range.start;
+        while start < range.end {
+            let len = (range.end - start).min(BLOCK - fill);
+            score_into::<false>(
+                x,
+                y,
+                lw,
+                g,
+                inv_eps,
+                start..start + len,
+                &mut scores[fill..fill + len],
+                &mut [],
+            );
+            fill += len;
+            start += len;
+            if fill == BLOCK {
+                reduce_scores(&mut scores, acc);
+                fill = 0;
+            }
+        }
+        pairs += range.len() as u64;
+    }
+    if fill > 0 {
+        let padded = fill.div_ceil(LANES) * LANES;
+        scores[fill..padded].fill(f32::NEG_INFINITY);
+        reduce_scores(&mut scores[..padded], acc);
+    }
+    pairs
+}
+
+/// Adds `Σ exp(score)` of a buffer whose length is a multiple of [`LANES`] to `acc` (the buffer is overwritten).
+#[inline(always)]
+fn reduce_scores(scores: &mut [f32], acc: &mut RowSum) {
+    acc.rescale_to(lane_max(scores));
+    if acc.max == f32::NEG_INFINITY {
+        return;
+    }
+    let m = acc.max;
+    for s in scores.iter_mut() {
+        *s = exp_nonpositive(*s - m);
+    }
+    acc.sum += f64::from(lane_sum(scores));
+}
+
+/// The body of [`stream_blocks`]: scores, their maximum, weights, then one sum per block.
+#[inline(always)]
+pub(super) fn block_sums(
+    x: &Point,
+    y: &[Vec<f32>; DIM],
+    lw: &[f32],
+    g: &[f32],
+    inv_eps: f32,
+    ranges: &[Range<usize>],
+    sums: &mut BlockSums,
+) -> u64 {
+    let mut len = 0;
+    for range in ranges {
+        score_into::<false>(
+            x,
+            y,
+            lw,
+            g,
+            inv_eps,
+            range.clone(),
+            &mut sums.scores[len..len + range.len()],
+            &mut [],
+        );
+        len += range.len();
+    }
+    let padded = len.div_ceil(LANES) * LANES;
+    let scores = &mut sums.scores[..padded];
+    scores[len..].fill(f32::NEG_INFINITY);
+    let m = lane_max(scores);
+    sums.max = m;
+    if m == f32::NEG_INFINITY {
+        sums.out.fill(0.0);
+        return len as u64;
+    }
+    for s in scores.iter_mut() {
+        *s = exp_nonpositive(*s - m);
+    }
+    let mut start = 0;
+    for (o, &l) in sums.out.iter_mut().zip(sums.lens) {
+        let end = start + l as usize;
+        let mut t = 0.0f32;
+        for &w in &scores[start..end] {
+            t += w;
+        }
+        *o = t;
+        start = end;
+    }
+    len as u64
+}
+
+/// Per-block buffers of a streamed row.
+pub(super) struct Scratch {
+    pub(super) scores: [f32; BLOCK],
+    pub(super) costs: [f32; BLOCK],
+    pub(super) weights: [f32; BLOCK],
+}
+
+/// Streams one range of targets into `acc` with its moments, in blocks of [`BLOCK`];
+/// returns its length.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub(super) fn push_range_moments(
+    x: &Point,
+    y: &[Vec<f32>; DIM],
+    lw: &[f32],
+    g: &[f32],
+    inv_eps: f32,
+    range: Range<usize>,
+    acc: &mut RowSum,
+    scratch: &mut Scratch,
+) -> u64 {
+    let Scratch {
+        scores,
+        costs,
+        weights,
+    } = scratch;
+    let mut start = range.start;
+    while start < range.end {
+        let len = (range.end - start).min(BLOCK);
+        let padded = len.div_ceil(LANES) * LANES;
+        score_into::<true>(
+            x,
+            y,
+            lw,
+            g,
+            inv_eps,
+            start..start + len,
+            &mut scores[..len],
+            &mut costs[..len],
+        );
+        scores[len..padded].fill(f32::NEG_INFINITY);
+        let block_max = lane_max(&scores[..padded]);
+        acc.rescale_to(block_max);
+        if acc.max == f32::NEG_INFINITY {
+            start += len;
+            continue;
+        }
+        let m = acc.max;
+        for (w, &sc) in weights[..padded].iter_mut().zip(&scores[..padded]) {
+            *w = exp_nonpositive(sc - m);
+        }
+        acc.sum += f64::from(lane_sum(&weights[..padded]));
+        let mut mom = [0.0f32; DIM + 1];
+        for k in 0..len {
+            for d in 0..DIM {
+                mom[d] += weights[k] * y[d][start + k];
+            }
+            mom[DIM] += weights[k] * costs[k];
+        }
+        for (a, b) in acc.moments.iter_mut().zip(mom) {
+            *a += f64::from(b);
+        }
+        start += len;
+    }
+    range.len() as u64
+}
+
+/// Sum of a slice whose length is a multiple of [`LANES`], in vectorisable lanes (fixed order).
+#[inline(always)]
+fn lane_sum(values: &[f32]) -> f32 {
+    let mut lanes = [0.0f32; LANES];
+    for chunk in values.chunks_exact(LANES) {
+        for l in 0..LANES {
+            lanes[l] += chunk[l];
+        }
+    }
+    lanes.iter().sum()
+}
+
+/// Maximum of a slice whose length is a multiple of [`LANES`], in vectorisable lanes.
+#[inline(always)]
+fn lane_max(values: &[f32]) -> f32 {
+    let mut lanes = [f32::NEG_INFINITY; LANES];
+    for chunk in values.chunks_exact(LANES) {
+        for l in 0..LANES {
+            lanes[l] = if chunk[l] > lanes[l] {
+                chunk[l]
+            } else {
+                lanes[l]
+            };
+        }
+    }
+    lanes.iter().copied().fold(f32::NEG_INFINITY, f32::max)
+}
