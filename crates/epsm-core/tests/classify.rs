@@ -10,6 +10,7 @@ use epsm_core::loss::{LossEval, MatchGuards};
 use epsm_core::paths::{Classified, Node};
 use epsm_core::schedule::PathUse;
 use epsm_core::{DropReason, PathKind, SolveSettings, classify};
+use epsm_render::record::PathRecord;
 use glam::{DVec2, Vec3};
 
 fn kinds(spec: &Spec, seed: u64) -> Vec<(PathKind, usize, usize)> {
@@ -157,18 +158,63 @@ fn a_non_finite_shadow_is_dropped_without_silencing_its_pixel() {
         &mut Rng::new(3),
     );
     s.table.add("o0.translate.x").expect("valid key");
+    // A second sample of the pixel reaches the light unblocked: the shadow
+    // is a penumbra's, which the umbra guard keeps.
+    let mut lit = s.record.clone();
+    for c in &mut lit.connections {
+        c.occluder = None;
+    }
     for c in &mut s.record.connections {
         c.unoccluded = Vec3::NAN;
     }
-    let (grad, stats) = backprop_alone(&s);
+    let (grad, stats) = backprop_records(&s, &[s.record.clone(), lit]);
     assert_eq!(stats.dropped.get(DropReason::NonFinite), 1);
-    assert_eq!(stats.solved, 1, "the primary path is still solved");
+    assert_eq!(
+        stats.solved, 2,
+        "both samples' primary paths are still solved"
+    );
     assert!(grad.iter().all(|g| g.is_finite()));
+}
+
+#[test]
+fn a_shadow_deep_in_an_umbra_is_dropped_and_counted() {
+    let mut s = synth(
+        &Spec::new(PathKind::Shadow, Vec::new(), End::PointNee),
+        &mut Rng::new(3),
+    );
+    s.table.add("o0.translate.x").expect("valid key");
+    let shadows = |s: &Synth| {
+        let c = classified(s);
+        c.paths
+            .iter()
+            .filter(|p| p.kind == PathKind::Shadow)
+            .count()
+    };
+    assert_eq!(shadows(&s), 1, "the record holds a shadow path");
+    // No sample within two pixels reaches the light unblocked: the shadow
+    // path is dropped and counted, the primary path still solved.
+    let (_, alone) = backprop_alone(&s);
+    assert_eq!(alone.dropped.get(DropReason::NotDifferentiable), 1);
+    assert_eq!(alone.solved, 1);
+    // With a lit sample in the pixel, it is solved.
+    let mut lit = s.record.clone();
+    for c in &mut lit.connections {
+        c.occluder = None;
+    }
+    let (_, penumbra) = backprop_records(&s, &[s.record.clone(), lit]);
+    assert_eq!(penumbra.dropped.get(DropReason::NotDifferentiable), 0);
+    assert_eq!(penumbra.solved, 3, "two primary paths and the shadow");
 }
 
 /// Backpropagates `s`'s record alone through a loss whose screen-space
 /// gradient is one in every pixel (and zero in colour).
 fn backprop_alone(s: &Synth) -> (Vec<f64>, PassStats) {
+    backprop_records(s, std::slice::from_ref(&s.record))
+}
+
+/// Backpropagates `records` (of `s`'s scene) through a loss whose
+/// screen-space gradient is one in every pixel (and zero in colour).
+fn backprop_records(s: &Synth, records: &[PathRecord]) -> (Vec<f64>, PassStats) {
     let (w, h) = (s.scene.camera().width, s.scene.camera().height);
     let n = (w * h) as usize;
     let loss = LossEval {
@@ -189,7 +235,7 @@ fn backprop_alone(s: &Synth) -> (Vec<f64>, PassStats) {
         spp: 1,
         use_: PathUse::All,
     };
-    backprop(&input, std::slice::from_ref(&s.record))
+    backprop(&input, records)
 }
 
 /// The first path `spec` builds with `rng` (building retries until one fits).
