@@ -15,6 +15,7 @@
 use epsm_render::Image;
 use serde::{Deserialize, Serialize};
 
+use super::{FINAL_JUDGE_FACTOR, Optimization};
 use crate::loss::tone_map;
 
 /// The lowest judged loss so far and where it was met.
@@ -125,6 +126,48 @@ pub fn tail_mean(iterates: &[&[f64]]) -> Option<Vec<f64>> {
 
 /// Fewest iterates a tail mean averages.
 pub const MIN_TAIL: usize = 4;
+
+impl Optimization {
+    /// Compares the mean θ of the L2 phase's last iterations (at most a
+    /// quarter of the run, the final θ included; [`tail_mean`]) with
+    /// the best θ so far under a finer judge ([`FINAL_JUDGE_FACTOR`] times
+    /// the samples: near the optimum the two differ by less than the
+    /// regular judge's noise) and keeps the better. θ is left at the final
+    /// iterate.
+    pub(super) fn offer_tail_mean(&mut self) {
+        let quarter = self.schedule.iterations.div_ceil(4);
+        let from = self
+            .schedule
+            .switch()
+            .max(self.iteration.saturating_sub(quarter));
+        let iterates: Vec<&[f64]> = (self.rows.iter())
+            .filter(|r| r.iteration >= from)
+            .map(|r| r.theta.as_slice())
+            .chain([self.theta.as_slice()])
+            .collect();
+        let averaged = iterates.len() as u32;
+        let Some(mean) = tail_mean(&iterates) else {
+            return;
+        };
+        let last = self.theta.clone();
+        let fine = self.judge.spp * FINAL_JUDGE_FACTOR;
+        if let Some(b) = self.best.clone() {
+            self.set_theta(&b.theta);
+            self.best = Some(Best {
+                loss: self.judged_at(fine),
+                ..b
+            });
+        }
+        self.set_theta(&mean);
+        let loss = self.judged_at(fine);
+        if Best::offer(&mut self.best, self.iteration, &self.theta, loss)
+            && let Some(b) = self.best.as_mut()
+        {
+            b.averaged = averaged;
+        }
+        self.set_theta(&last);
+    }
+}
 
 #[cfg(test)]
 mod tests {

@@ -57,7 +57,7 @@ pub use error::{OptResult, OptimizeError};
 
 use crate::backprop::{PassInput, PassStats, backprop, record_level};
 use crate::colour::{ColourModel, PrimaryMotion};
-use crate::loss::{LossEval, LossKind, add_flow, evaluate, resample, rmse};
+use crate::loss::{LossEval, add_flow, evaluate, resample, rmse};
 use crate::optim::{Adam, AdamSettings};
 use crate::params::ParamTable;
 use crate::problem::auto::{self, Choice};
@@ -418,51 +418,6 @@ impl Optimization {
         ))
     }
 
-    /// The `prdpt` method's gradient: [`prdpt::PAIRS`] antithetic pairs of
-    /// forward renders at the match resolution, `render.spp_grad` samples
-    /// each, and the L2 loss of a render at θ for the row.
-    fn smoothed_gradient(&self, smoothing: &Smoothing) -> OptResult<GradientEval> {
-        let t0 = Instant::now();
-        let spp = self.problem.passes.spp_grad;
-        let lambda = self.problem.loss.lambda;
-        let sigma = smoothing.sigma(self.iteration);
-        let eps = prdpt::perturbations(self.theta.len(), u64::from(self.seed(PRDPT_SALT)));
-        let mut view = self.grad.clone();
-        let mut losses = Vec::with_capacity(eps.len());
-        for (i, e) in (0u32..).zip(&eps) {
-            let seed = self.seed(PRDPT_SALT + 1 + i);
-            let mut pair = [0.0; 2];
-            for (l, sign) in pair.iter_mut().zip([1.0, -1.0]) {
-                let mut theta: Vec<f64> = (self.theta.iter().zip(e).zip(&sigma))
-                    .map(|((t, ek), sk)| t + sign * sk * ek)
-                    .collect();
-                self.adam.clamp(&mut theta);
-                view.set(&theta);
-                let image = render_image(&view.scene, spp, seed);
-                *l = evaluate(LossKind::L2, &image, &self.target_match, lambda, None)?.value;
-            }
-            losses.push((pair[0], pair[1]));
-        }
-        let image = render_image(&self.grad.scene, spp, self.seed(0));
-        let loss = evaluate(LossKind::L2, &image, &self.target_match, lambda, None)?;
-        let traced = u64::from(spp) * u64::from(image.width * image.height);
-        Ok(GradientEval {
-            grad: prdpt::estimate(&eps, &losses, &sigma),
-            loss,
-            image,
-            stats: PassStats {
-                traced: traced * (2 * eps.len() as u64 + 1),
-                ..PassStats::default()
-            },
-            timings: Timings {
-                primal: 0.0,
-                trace: t0.elapsed().as_secs_f64(),
-                matching: 0.0,
-                solve: 0.0,
-            },
-        })
-    }
-
     /// Whether independent stages of an iteration run at the same time
     /// (default on): the primal render beside the gradient pass, and the
     /// loss's independent render beside the recorded trace. Either way the
@@ -553,46 +508,6 @@ impl Optimization {
             self.offer_tail_mean();
         }
         Ok(row)
-    }
-
-    /// Compares the mean θ of the L2 phase's last iterations (at most a
-    /// quarter of the run, the final θ included; [`best::tail_mean`]) with
-    /// the best θ so far under a finer judge ([`FINAL_JUDGE_FACTOR`] times
-    /// the samples: near the optimum the two differ by less than the
-    /// regular judge's noise) and keeps the better. θ is left at the final
-    /// iterate.
-    fn offer_tail_mean(&mut self) {
-        let quarter = self.schedule.iterations.div_ceil(4);
-        let from = self
-            .schedule
-            .switch()
-            .max(self.iteration.saturating_sub(quarter));
-        let iterates: Vec<&[f64]> = (self.rows.iter())
-            .filter(|r| r.iteration >= from)
-            .map(|r| r.theta.as_slice())
-            .chain([self.theta.as_slice()])
-            .collect();
-        let averaged = iterates.len() as u32;
-        let Some(mean) = best::tail_mean(&iterates) else {
-            return;
-        };
-        let last = self.theta.clone();
-        let fine = self.judge.spp * FINAL_JUDGE_FACTOR;
-        if let Some(b) = self.best.clone() {
-            self.set_theta(&b.theta);
-            self.best = Some(Best {
-                loss: self.judged_at(fine),
-                ..b
-            });
-        }
-        self.set_theta(&mean);
-        let loss = self.judged_at(fine);
-        if Best::offer(&mut self.best, self.iteration, &self.theta, loss)
-            && let Some(b) = self.best.as_mut()
-        {
-            b.averaged = averaged;
-        }
-        self.set_theta(&last);
     }
 
     /// Whether `optimizer.stop` ends the run now: the judged loss has not

@@ -18,8 +18,15 @@ use rand::{Rng, SeedableRng};
 use rand_distr::StandardNormal;
 use rand_pcg::Pcg64;
 
+use std::time::Instant;
+
+use super::{GradientEval, Optimization, PRDPT_SALT, render_image};
+use crate::backprop::PassStats;
+use crate::loss::{LossKind, evaluate};
 use crate::problem::ParamSpec;
 use crate::problem::auto::CROSSING;
+use crate::report::Timings;
+use crate::run::OptResult;
 
 /// Antithetic pairs per gradient estimate (two forward renders each).
 pub const PAIRS: u32 = 4;
@@ -83,6 +90,53 @@ pub fn estimate(eps: &[Vec<f64>], losses: &[(f64, f64)], sigma: &[f64]) -> Vec<f
     let n = eps.len().max(1) as f64;
     g.iter_mut().for_each(|gk| *gk /= n);
     g
+}
+
+impl Optimization {
+    /// The `prdpt` method's gradient: [`PAIRS`] antithetic pairs of
+    /// forward renders at the match resolution, `render.spp_grad` samples
+    /// each, and the L2 loss of a render at θ for the row.
+    pub(super) fn smoothed_gradient(&self, smoothing: &Smoothing) -> OptResult<GradientEval> {
+        let t0 = Instant::now();
+        let spp = self.problem.passes.spp_grad;
+        let lambda = self.problem.loss.lambda;
+        let sigma = smoothing.sigma(self.iteration);
+        let eps = perturbations(self.theta.len(), u64::from(self.seed(PRDPT_SALT)));
+        let mut view = self.grad.clone();
+        let mut losses = Vec::with_capacity(eps.len());
+        for (i, e) in (0u32..).zip(&eps) {
+            let seed = self.seed(PRDPT_SALT + 1 + i);
+            let mut pair = [0.0; 2];
+            for (l, sign) in pair.iter_mut().zip([1.0, -1.0]) {
+                let mut theta: Vec<f64> = (self.theta.iter().zip(e).zip(&sigma))
+                    .map(|((t, ek), sk)| t + sign * sk * ek)
+                    .collect();
+                self.adam.clamp(&mut theta);
+                view.set(&theta);
+                let image = render_image(&view.scene, spp, seed);
+                *l = evaluate(LossKind::L2, &image, &self.target_match, lambda, None)?.value;
+            }
+            losses.push((pair[0], pair[1]));
+        }
+        let image = render_image(&self.grad.scene, spp, self.seed(0));
+        let loss = evaluate(LossKind::L2, &image, &self.target_match, lambda, None)?;
+        let traced = u64::from(spp) * u64::from(image.width * image.height);
+        Ok(GradientEval {
+            grad: estimate(&eps, &losses, &sigma),
+            loss,
+            image,
+            stats: PassStats {
+                traced: traced * (2 * eps.len() as u64 + 1),
+                ..PassStats::default()
+            },
+            timings: Timings {
+                primal: 0.0,
+                trace: t0.elapsed().as_secs_f64(),
+                matching: 0.0,
+                solve: 0.0,
+            },
+        })
+    }
 }
 
 #[cfg(test)]
