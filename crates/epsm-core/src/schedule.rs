@@ -68,15 +68,10 @@ pub enum PathUse {
     All,
 }
 
-/// Detects that an optimization has stopped improving: the loss's
-/// exponential moving average (weight [`Plateau::SMOOTHING`] on the newest
-/// value) has not fallen by [`Plateau::MIN_GAIN`] (relative) below its best
-/// for `window` observations, and θ no longer travels in one direction: over
-/// the last `window` steps (each parameter's change in units of its learning
-/// rate) the net move is less than [`Plateau::MAX_DRIFT`] of the path
-/// length. The second test keeps the OT phase while a small effect (a
-/// caustic, a highlight) still pulls θ steadily although the loss of the
-/// whole image hardly changes.
+/// Detects that a loss has stopped improving: its exponential moving
+/// average (weight [`Plateau::SMOOTHING`] on the newest value) has not
+/// fallen by [`Plateau::MIN_GAIN`] (relative) below its best for `window`
+/// observations.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Plateau {
     /// Observations without improvement that make a plateau.
@@ -89,10 +84,6 @@ pub struct Plateau {
     pub best: Option<f64>,
     /// The observation (0-based) that set `best`.
     pub best_at: u32,
-    /// The last `window` steps of θ, in units of each parameter's
-    /// learning rate (oldest first).
-    #[serde(default)]
-    pub steps: std::collections::VecDeque<Vec<f64>>,
 }
 
 impl Plateau {
@@ -100,10 +91,6 @@ impl Plateau {
     pub const SMOOTHING: f64 = 0.3;
     /// The relative fall of the average that counts as an improvement.
     pub const MIN_GAIN: f64 = 0.01;
-    /// The largest ratio of θ's net move to its path length over the
-    /// window that counts as no longer travelling (a random walk of 7
-    /// steps gives about 0.38, a steady move 1).
-    pub const MAX_DRIFT: f64 = 0.5;
 
     /// A detector with no observations.
     pub fn new(window: u32) -> Self {
@@ -113,19 +100,12 @@ impl Plateau {
             average: None,
             best: None,
             best_at: 0,
-            steps: std::collections::VecDeque::new(),
         }
     }
 
-    /// Adds the loss `value` and θ's `step` that followed it (in units of
-    /// each parameter's learning rate); returns whether the average has now
-    /// gone `window` observations without improving while θ has stopped
-    /// travelling ([`Plateau::drift`]).
-    pub fn observe(&mut self, value: f64, step: &[f64]) -> bool {
-        self.steps.push_back(step.to_vec());
-        while self.steps.len() > self.window as usize {
-            self.steps.pop_front();
-        }
+    /// Adds `value`; returns whether the average has now gone `window`
+    /// observations without improving.
+    pub fn observe(&mut self, value: f64) -> bool {
         let a = self.average.map_or(value, |a| {
             Self::SMOOTHING * value + (1.0 - Self::SMOOTHING) * a
         });
@@ -135,23 +115,7 @@ impl Plateau {
             self.best_at = self.seen;
         }
         self.seen += 1;
-        self.seen - self.best_at > self.window && self.drift() < Self::MAX_DRIFT
-    }
-
-    /// θ's net move over the last steps divided by their path length (1:
-    /// every step in one direction; 0: no move, or back where it started).
-    pub fn drift(&self) -> f64 {
-        let n = self.steps.front().map_or(0, Vec::len);
-        let net: f64 = (0..n)
-            .map(|k| self.steps.iter().map(|s| s[k]).sum::<f64>().powi(2))
-            .sum::<f64>()
-            .sqrt();
-        let path: f64 = self
-            .steps
-            .iter()
-            .map(|s| s.iter().map(|x| x * x).sum::<f64>().sqrt())
-            .sum();
-        if path > 0.0 { net / path } else { 0.0 }
+        self.seen - self.best_at > self.window
     }
 }
 
@@ -237,13 +201,12 @@ impl Schedule {
         }
     }
 
-    /// Records the loss of OT iteration `iteration` and θ's step after it
-    /// (in units of each parameter's learning rate); decides the switch
-    /// when the optimization has reached its plateau ([`Plateau`]) or the
-    /// latest iteration has come, so that L2 starts at `iteration + 1`.
-    pub fn observe(&mut self, iteration: u32, loss: f64, step: &[f64]) {
+    /// Records the loss of OT iteration `iteration`; decides the switch
+    /// when the loss has reached its plateau or the latest iteration has
+    /// come, so that L2 starts at `iteration + 1`.
+    pub fn observe(&mut self, iteration: u32, loss: f64) {
         if let Switch::OnPlateau { plateau, latest } = &mut self.switch {
-            let flat = plateau.observe(loss, step);
+            let flat = plateau.observe(loss);
             if flat || iteration + 1 >= *latest {
                 self.switch = Switch::At(iteration + 1);
             }
@@ -305,29 +268,23 @@ mod tests {
         let mut i = 0;
         // Falling by 10 % per iteration: no switch.
         while i < 10 {
-            s.observe(i, 0.9f64.powi(i as i32), &[1.0]);
+            s.observe(i, 0.9f64.powi(i as i32));
             i += 1;
         }
         assert_eq!(s.switch(), 40);
-        // A flat loss while θ still travels one way: no switch either.
-        while i < 20 {
-            s.observe(i, 0.9f64.powi(10), &[0.5]);
-            i += 1;
-        }
-        assert_eq!(s.switch(), 40);
-        // Flat, θ back and forth from here: the switch follows the window
-        // (θ's last steps must first turn into a random walk).
+        // Flat from here: the average's lag keeps it improving for several
+        // iterations, then the switch follows the window.
         while s.switch() == 40 {
-            s.observe(i, 0.9f64.powi(10), &[if i % 2 == 0 { 1.0 } else { -1.0 }]);
+            s.observe(i, 0.9f64.powi(10));
             i += 1;
         }
-        assert!((21..=26).contains(&s.switch()), "switch at {}", s.switch());
+        assert!((14..=26).contains(&s.switch()), "switch at {}", s.switch());
         assert!(s.resets_at(s.switch()) && s.loss_at(s.switch()) == LossKind::L2);
         // Still falling at the latest iteration: the switch comes then.
         let mut t = Schedule::on_plateau(Method::Epsm, LossKind::OtExact, 40, 3, 30);
         for i in 0..40 {
             if t.loss_at(i).is_ot() {
-                t.observe(i, 0.8f64.powi(i as i32), &[1.0]);
+                t.observe(i, 0.8f64.powi(i as i32));
             }
         }
         assert_eq!(t.switch(), 30);

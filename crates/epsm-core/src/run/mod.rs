@@ -492,12 +492,9 @@ impl Optimization {
             let key = self.problem.params.get(e.param).map(|p| p.key.clone());
             OptimizeError::NonFiniteGradient(key.unwrap_or_else(|| e.param.to_string()))
         })?;
-        let step: Vec<f64> = (theta.iter().zip(&self.theta).zip(&self.problem.params))
-            .map(|((new, old), p)| (new - old) / p.lr)
-            .collect();
         self.set_theta(&theta);
         if ot {
-            self.schedule.observe(self.iteration, g.loss.value, &step);
+            self.schedule.observe(self.iteration, g.loss.value);
         }
         self.iteration += 1;
         self.stopped = self.converged();
