@@ -39,6 +39,17 @@ summary=$(
     rm -f "$csvs.$method"
   done
 )
+per_problem=$(
+  for name in "${names[@]}"; do
+    line="| $name"
+    for method in epsm drot l2 prdpt; do
+      runs=$(awk -F, -v m="$method" -v p="$name" '$1 == p && $2 == m' "$csvs" | wc -l)
+      solved=$(awk -F, -v m="$method" -v p="$name" '$1 == p && $2 == m && $7 == "yes"' "$csvs" | wc -l)
+      line+=" | $solved/$runs"
+    done
+    echo "$line |"
+  done
+)
 {
   echo "# Results"
   echo
@@ -56,6 +67,12 @@ summary=$(
   echo "| method | solved | median parameter error | median wall s |"
   echo "|---|---|---|---|"
   echo "$summary"
+  echo
+  echo "## Per problem (runs solved of 3)"
+  echo
+  echo "| problem | epsm | drot | l2 | prdpt |"
+  echo "|---|---|---|---|---|"
+  echo "$per_problem"
   echo
   echo "## Per run"
   echo
