@@ -265,6 +265,13 @@ fn drop_umbra(
     width: u32,
     pixel_of: impl Fn(&PathRecord) -> usize,
 ) -> Vec<Option<Classified>> {
+    let shadows = classified
+        .iter()
+        .flatten()
+        .any(|c| c.paths.iter().any(|p| p.kind == PathKind::Shadow));
+    if !shadows {
+        return classified;
+    }
     let mut lit = std::collections::HashSet::new();
     for r in records {
         for c in r

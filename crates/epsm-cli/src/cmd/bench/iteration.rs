@@ -19,7 +19,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use epsm_core::report::Timings;
+use epsm_core::report::{Timings, mean_timings};
 use epsm_core::{Optimization, load_problem};
 
 /// Arguments of `epsm bench iteration`.
@@ -103,33 +103,16 @@ fn measure(
 ) -> anyhow::Result<Measured> {
     let mut opt = Optimization::new(problem)?;
     opt.set_overlap(overlap);
-    let mut first_s = 0.0;
-    let mut wall_s = 0.0;
-    let mut stages = Timings::default();
-    for i in 0..iterations {
+    let mut seconds = Vec::with_capacity(iterations as usize);
+    for _ in 0..iterations {
         let t0 = Instant::now();
-        let row = opt.step()?;
-        let dt = t0.elapsed().as_secs_f64();
-        if i == 0 {
-            first_s = dt;
-            continue;
-        }
-        wall_s += dt;
-        let t = &row.timings;
-        stages.primal += t.primal;
-        stages.trace += t.trace;
-        stages.matching += t.matching;
-        stages.solve += t.solve;
+        opt.step()?;
+        seconds.push(t0.elapsed().as_secs_f64());
     }
-    let n = f64::from(iterations - 1);
+    let later = &seconds[1..];
     Ok(Measured {
-        first_s,
-        wall_s: wall_s / n,
-        stages: Timings {
-            primal: stages.primal / n,
-            trace: stages.trace / n,
-            matching: stages.matching / n,
-            solve: stages.solve / n,
-        },
+        first_s: seconds[0],
+        wall_s: later.iter().sum::<f64>() / later.len() as f64,
+        stages: mean_timings(&opt.rows()[1..]),
     })
 }
