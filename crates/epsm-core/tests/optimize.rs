@@ -348,3 +348,48 @@ fn prdpt_moves_a_translation_toward_the_truth() {
     let last = opt.theta()[0].abs();
     assert!(last < 0.3 * 0.5, "error 0.3 -> {last}");
 }
+
+/// A camera translation with the colour-flow term (on by default for
+/// camera parameters): in the OT phase and in the L2 phase the gradient
+/// points toward the truth and has the sign and order of the central
+/// difference of the phase's loss; at the truth it is small against the
+/// gradient at the offset (the loss compares a render independent of the
+/// differentiated paths, so its noise does not bias the flow term).
+#[test]
+fn camera_gradient_with_flow_follows_the_loss_in_both_phases() {
+    let camera = r#"
+[[parameters]]
+key = "camera.translate.x"
+initial = 0.15
+true = 0.0
+bounds = [-0.5, 0.5]
+"#;
+    for l2_fraction in [0.0, 1.0] {
+        let mut p = tiny(camera);
+        p.loss.flow = None;
+        p.passes.spp_match = None;
+        p.passes.spp_grad = 16;
+        p.optimizer.l2_fraction = Some(l2_fraction);
+        let mut opt = Optimization::new(p).expect("setup");
+        assert_eq!(opt.problem().loss.flow, Some(true));
+        assert!(opt.problem().passes.spp_match.unwrap_or(0) > 0);
+        let mut at = |v: f64| {
+            opt.set_theta(&[v]);
+            let (g, _) = opt.gradient().expect("gradient");
+            (g.grad[0], g.loss.value)
+        };
+        let (g, _) = at(0.15);
+        let (g0, _) = at(0.0);
+        let h = 0.03;
+        let fd = (at(0.15 + h).1 - at(0.15 - h).1) / (2.0 * h);
+        assert!(
+            g > 0.0 && fd > 0.0,
+            "gradient {g:e}, finite difference {fd:e}"
+        );
+        assert!(
+            g < 1.5 * fd && g > 0.5 * fd,
+            "gradient {g:e}, finite difference {fd:e}"
+        );
+        assert!(g0.abs() < 0.25 * g, "at the truth {g0:e} against {g:e}");
+    }
+}

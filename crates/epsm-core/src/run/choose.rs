@@ -73,12 +73,6 @@ pub(super) fn choose(
         choices.push(Choice::new("optimizer.decay", format!("{d:.4}"), why));
     }
     let spp_grad = problem.passes.spp_grad;
-    if problem.passes.spp_match.is_none() && problem.loss.flow == Some(true) {
-        problem.passes.spp_match = Some(0);
-        let why = "the colour-flow term turns the matching's colour residual into the camera's \
-                   gradient, and a clean matched image leaves almost none: the gradient pass's image";
-        choices.push(Choice::new("render.spp_match", "0", why));
-    }
     if problem.passes.spp_match.is_none() {
         let seed = problem.optimizer.seed;
         let seeds = [stream_seed(seed, 0, 0xA1), stream_seed(seed, 0, 0xA2)];

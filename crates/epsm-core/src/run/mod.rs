@@ -63,7 +63,7 @@ use crate::params::ParamTable;
 use crate::problem::auto::{self, Choice};
 use crate::problem::{LossImage, Problem, Target};
 use crate::report::{Row, Timings, param_error};
-use crate::schedule::{Method, Schedule};
+use crate::schedule::{Method, PathUse, Schedule};
 use prdpt::Smoothing;
 
 /// A scene and its parameter table (one per resolution).
@@ -351,12 +351,24 @@ impl Optimization {
         if let Some(smoothing) = &self.smoothing {
             return Ok((self.smoothed_gradient(smoothing)?, Vec::new()));
         }
-        let use_ = self.schedule.paths_at(self.iteration);
         let l2 = !self.schedule.loss_at(self.iteration).is_ot();
+        // With the colour-flow term, an L2 iteration of the epsm method
+        // differentiates like an OT one: the flow term supplies what the
+        // pixel's colour gains as content (and its edges) moves across it,
+        // so the pixel's vertex moves with its surface and every path's
+        // screen motion counts.
+        let flow_l2 = l2
+            && self.problem.loss.flow == Some(true)
+            && self.problem.optimizer.method == Method::Epsm;
+        let use_ = if flow_l2 {
+            PathUse::All
+        } else {
+            self.schedule.paths_at(self.iteration)
+        };
         let colour = ColourModel::new(
             &self.grad.table,
             &self.grad.scene,
-            l2.then_some(PrimaryMotion::OnCameraRay),
+            (l2 && !flow_l2).then_some(PrimaryMotion::OnCameraRay),
         );
         let level = record_level(&self.grad.table, &self.grad.scene, &colour, use_);
         let spp = self.problem.passes.spp_grad;
@@ -387,7 +399,7 @@ impl Optimization {
             self.problem.loss.lambda,
             Some(warm),
         )?;
-        if self.problem.loss.flow == Some(true) && kind.is_ot() {
+        if self.problem.loss.flow == Some(true) && (kind.is_ot() || flow_l2) {
             add_flow(&image, &mut loss)?;
         }
         let t2 = Instant::now();
