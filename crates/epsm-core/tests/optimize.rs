@@ -393,3 +393,32 @@ bounds = [-0.5, 0.5]
         assert!(g0.abs() < 0.25 * g, "at the truth {g0:e} against {g:e}");
     }
 }
+
+/// The colour-flow term is on by default when every moving object is seen
+/// directly, and off when a light moves or a moving object is out of view.
+#[test]
+fn the_flow_term_follows_what_the_camera_sees() {
+    let case = |key: &str, initial: f64| {
+        let text = format!(
+            "[[parameters]]\nkey = \"{key}\"\ninitial = {initial}\ntrue = 0.0\nbounds = [-6.0, 6.0]\n"
+        );
+        let mut p = tiny(&text);
+        p.loss.flow = None;
+        let opt = Optimization::new(p).expect("setup");
+        let choice = opt
+            .choices()
+            .iter()
+            .find(|c| c.key == "loss.flow")
+            .expect("flow chosen")
+            .clone();
+        (opt.problem().loss.flow, choice.why)
+    };
+    let (seen, why) = case("box.translate.x", 0.2);
+    assert_eq!(seen, Some(true), "{why}");
+    let (light, why) = case("lamp.translate.x", 0.2);
+    assert_eq!(light, Some(false), "{why}");
+    assert!(why.contains("light"), "{why}");
+    let (hidden, why) = case("box.translate.x", 5.5);
+    assert_eq!(hidden, Some(false), "{why}");
+    assert!(why.contains("not seen directly"), "{why}");
+}

@@ -8,7 +8,7 @@
 //! | `optimizer.decay` | `(1/`[`FINAL_LR_DIVISOR`]`)^(1/iterations)`: the last step is 1/20 of the first |
 //! | `optimizer.beta1` | [`BETA1`] |
 //! | `optimizer.beta2` | [`beta2`]: 0.9 when every parameter is a material value, else 0.999 |
-//! | `loss.flow` | on when a camera parameter is optimized |
+//! | `loss.flow` | on when a camera parameter is optimized, or every geometric parameter moves a non-emissive object seen directly (`crate::run`) |
 //!
 //! The hybrid switch and the matched render's samples are chosen when the
 //! run starts (`crate::run`).

@@ -2,11 +2,16 @@
 //! colour-flow term, the decay, the matched render's samples, the hybrid
 //! switch and the judge of the best θ, each recorded with its reason.
 
-use epsm_render::Image;
+use std::collections::HashSet;
+
+use epsm_render::scene::ObjectId;
+use epsm_render::{Image, Scene};
+use glam::Vec2;
 
 use super::best::Judge;
 use super::noise::{self, Noise};
 use super::{View, latest_switch, stream_seed, window};
+use crate::params::Target;
 use crate::problem::Problem;
 use crate::problem::auto::{self, Choice, is_camera, is_geometric};
 use crate::schedule::Schedule;
@@ -42,14 +47,9 @@ pub(super) fn choose(
         }
     }
     if problem.loss.flow.is_none() {
-        let camera = targets.iter().any(is_camera);
-        let why = if camera {
-            "a camera parameter is optimized: the whole image moves"
-        } else {
-            "no camera parameter is optimized"
-        };
-        problem.loss.flow = Some(camera);
-        choices.push(Choice::new("loss.flow", camera.to_string(), why));
+        let (on, why) = flow_rule(&targets, &grad.scene);
+        problem.loss.flow = Some(on);
+        choices.push(Choice::new("loss.flow", on.to_string(), why));
     }
     if problem.optimizer.beta2.is_none() {
         let material_only = !targets.iter().any(is_geometric);
@@ -125,4 +125,76 @@ pub(super) fn choose(
     );
     choices.push(Choice::new("best", "judged", why));
     (schedule, judge)
+}
+
+/// The colour-flow term's automatic rule: on when the camera moves, or when
+/// every geometric parameter moves an object that is not a light and that
+/// camera rays through the match resolution's pixel centres see directly
+/// (its pixels' content moves with it). Off when a light moves (its
+/// shading changes rather than moves) or an object is seen only through
+/// shadows, reflections or refractions, where the flow term's image
+/// differences follow noise more than motion. Returns the choice and why.
+fn flow_rule(targets: &[Target], scene: &Scene) -> (bool, String) {
+    if targets.iter().any(is_camera) {
+        return (
+            true,
+            "a camera parameter is optimized: the whole image moves".into(),
+        );
+    }
+    let geometric: Vec<&Target> = targets.iter().filter(|t| is_geometric(t)).collect();
+    if geometric.is_empty() {
+        return (false, "no geometric parameter".into());
+    }
+    let seen = directly_seen(scene);
+    for t in geometric {
+        let object = match *t {
+            Target::Translate { object, .. }
+            | Target::Rotate { object, .. }
+            | Target::Scale { object } => object,
+            _ => {
+                return (
+                    false,
+                    "a light moves: its shading changes, not only moves".into(),
+                );
+            }
+        };
+        let light = scene
+            .objects()
+            .get(object as usize)
+            .is_none_or(|o| o.emission.is_some());
+        if light {
+            return (
+                false,
+                "a light moves: its shading changes, not only moves".into(),
+            );
+        }
+        if !seen.contains(&object) {
+            return (
+                false,
+                "a moving object is not seen directly (only its shadows, reflections or \
+                 refractions)"
+                    .into(),
+            );
+        }
+    }
+    (
+        true,
+        "every moving object is seen directly: its pixels' content moves with it".into(),
+    )
+}
+
+/// The objects the camera ray through some pixel centre of `scene` hits
+/// first.
+fn directly_seen(scene: &Scene) -> HashSet<ObjectId> {
+    let cam = scene.camera();
+    let mut seen = HashSet::new();
+    for y in 0..cam.height {
+        for x in 0..cam.width {
+            let ray = cam.ray(Vec2::new(x as f32 + 0.5, y as f32 + 0.5));
+            if let Some(hit) = scene.accel().closest_hit(&ray) {
+                seen.insert(hit.object);
+            }
+        }
+    }
+    seen
 }
