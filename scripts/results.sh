@@ -2,8 +2,9 @@
 # Regenerates docs/results.md by running `epsm compare` (methods epsm, drot,
 # l2, prdpt) on every shipped problem with seeds 1, 2 and 3 (only the epsm
 # binary is used). Usage:
-#   scripts/results.sh [EPSM_BINARY] [ITERATIONS] [PROBLEM_NAMES...]
+#   [METHODS=epsm,drot] scripts/results.sh [EPSM_BINARY] [ITERATIONS] [PROBLEM_NAMES...]
 # e.g. scripts/results.sh target/release/epsm "" caustic mirror layout
+# METHODS (comma-separated, default epsm,drot,l2,prdpt) picks the methods run and tabulated.
 set -euo pipefail
 epsm=${1:-target/release/epsm}
 iterations=${2:-}
@@ -13,13 +14,15 @@ if [ ${#names[@]} -eq 0 ]; then
   names=()
   for f in scenes/problems/*.toml; do names+=("$(basename "$f" .toml)"); done
 fi
+methods=${METHODS:-epsm,drot,l2,prdpt}
+IFS=, read -r -a method_list <<< "$methods"
 seeds=(1 2 3)
 rows=$(mktemp)
 csvs=$(mktemp)
 for name in "${names[@]}"; do
   for seed in "${seeds[@]}"; do
     out="out/results/$name-$seed"
-    args=(compare "scenes/problems/$name.toml" --methods epsm,drot,l2,prdpt --seed "$seed" --out "$out" --markdown)
+    args=(compare "scenes/problems/$name.toml" --methods "$methods" --seed "$seed" --out "$out" --markdown)
     if [ -n "$iterations" ]; then args+=(--iterations "$iterations"); fi
     "$epsm" "${args[@]}" >> "$rows"
     tail -n +2 "$out/compare.csv" >> "$csvs"
@@ -28,7 +31,7 @@ done
 # compare.csv columns: problem,method,seed,param_error,last_param_error,
 # tolerance,solved,image_rmse,iterations,wall_s,...
 summary=$(
-  for method in epsm drot l2 prdpt; do
+  for method in "${method_list[@]}"; do
     awk -F, -v m="$method" '$2 == m' "$csvs" > "$csvs.$method"
     runs=$(wc -l < "$csvs.$method")
     solved=$(awk -F, '$7 == "yes"' "$csvs.$method" | wc -l)
@@ -42,7 +45,7 @@ summary=$(
 per_problem=$(
   for name in "${names[@]}"; do
     line="| $name"
-    for method in epsm drot l2 prdpt; do
+    for method in "${method_list[@]}"; do
       runs=$(awk -F, -v m="$method" -v p="$name" '$1 == p && $2 == m' "$csvs" | wc -l)
       solved=$(awk -F, -v m="$method" -v p="$name" '$1 == p && $2 == m && $7 == "yes"' "$csvs" | wc -l)
       line+=" | $solved/$runs"
@@ -70,8 +73,8 @@ per_problem=$(
   echo
   echo "## Per problem (runs solved of 3)"
   echo
-  echo "| problem | epsm | drot | l2 | prdpt |"
-  echo "|---|---|---|---|---|"
+  echo "| problem | ${methods//,/ | } |"
+  echo "|---|$(printf -- '---|%.0s' "${method_list[@]}")"
   echo "$per_problem"
   echo
   echo "## Per run"
