@@ -28,7 +28,7 @@ use crate::drops::DropReason;
 fn scatter<T: RealField + Copy>(
     wi: &Vector3<T>,
     n: &Vector3<T>,
-    eta: f64,
+    eta: T,
     transmit: bool,
 ) -> Option<Vector3<T>> {
     let c = n.dot(wi);
@@ -38,7 +38,7 @@ fn scatter<T: RealField + Copy>(
     }
     // The normal on the side of wi.
     let (n, c) = if c >= T::zero() { (*n, c) } else { (-n, -c) };
-    let inv: T = nalgebra::convert(1.0 / eta);
+    let inv: T = T::one() / eta;
     let s2 = inv * inv * (T::one() - c * c);
     if s2 >= T::one() {
         return None;
@@ -56,16 +56,21 @@ fn dual(v: DVec3, d: DVec3) -> Vector3<Dual64> {
 }
 
 /// The scattered direction at a delta vertex and its derivative, given
-/// `wi` and the normal with their derivatives.
+/// `wi`, the normal and the relative IOR `eta` with their derivatives.
 pub(super) fn scattered(
     wi: DVec3,
     dwi: DVec3,
     n: DVec3,
     dn: DVec3,
-    eta: f64,
+    [eta, deta]: [f64; 2],
     transmit: bool,
 ) -> Option<[DVec3; 2]> {
-    let r = scatter(&dual(wi, dwi), &dual(n, dn), eta, transmit)?;
+    let r = scatter(
+        &dual(wi, dwi),
+        &dual(n, dn),
+        Dual64::new(eta, deta),
+        transmit,
+    )?;
     Some([
         DVec3::new(r[0].re, r[1].re, r[2].re),
         DVec3::new(r[0].eps, r[1].eps, r[2].eps),

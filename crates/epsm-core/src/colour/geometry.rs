@@ -115,6 +115,8 @@ pub(super) struct Geometric<'a> {
     pub(super) primary: PrimaryMotion,
     /// `(param, scale value)` of every scale parameter.
     pub(super) scales: &'a [(usize, f64)],
+    /// Per material id, the parameter that sets its dielectric IOR.
+    pub(super) iors: &'a [Option<usize>],
 }
 
 impl Geometric<'_> {

@@ -9,8 +9,9 @@
 //! | `alpha` (rough conductor) | `f·|cos|` | central difference, `h = 1e-3·max(α, 1e-3)` |
 //! | `ior` (dielectric) | the lobe's weight over its fixed choice probability: `F` (reflection), `(1 − F)/η²` (refraction) | analytic `∂F/∂η` in `f64` |
 //!
-//! The refracted direction's change with `ior` moves the chain: that is a
-//! position effect, differentiated through `dp/dθ`.
+//! The refracted direction's change with `ior` moves the vertices behind
+//! the interface: in L2 iterations a geometric term (`place.rs`, the next
+//! vertex on the turned ray), with OT a position effect through `dp/dθ`.
 
 use epsm_render::materials::{Bsdf, Lobe, Material, Texture};
 use glam::{Vec2, Vec3};

@@ -11,7 +11,7 @@
 //! |---|---|---|
 //! | `albedo.r/g/b` (diffuse) | exact | `material.rs` |
 //! | `alpha` (rough conductor) | central difference | `material.rs` |
-//! | `ior` (dielectric) | Fresnel weight, central difference (fixed directions) | `material.rs` |
+//! | `ior` (dielectric) | Fresnel weight, central difference (fixed directions); the refracted ray turns with it, moving the vertices after the interface (L2 iterations) | `material.rs`, [`geometry`] |
 //! | `emission` | exact: `∂c/∂s = c_e/s` for every term `c_e` the emitter emits | here |
 //! | translation, rotation, scale of objects and emitters; point lights; camera position, yaw, pitch | vertices move with θ: BSDF values, cosines, `1/r²`, area | [`geometry`] |
 //!
@@ -59,6 +59,9 @@ pub struct ColourModel {
     primary: Option<PrimaryMotion>,
     /// `(param, value)` of every scale parameter.
     scales: Vec<(usize, f64)>,
+    /// Per material id, the parameter that sets its dielectric IOR (the
+    /// refracted rays turn with it: a geometric term).
+    iors: Vec<Option<usize>>,
 }
 
 impl ColourModel {
@@ -69,8 +72,14 @@ impl ColourModel {
         let mut materials = vec![Vec::new(); scene.materials().len()];
         let mut emission = vec![None; scene.objects().len()];
         let mut scales = Vec::new();
+        let mut iors = vec![None; scene.materials().len()];
         for (param, p) in table.params().iter().enumerate() {
             let v = p.value as f32;
+            if let Target::Ior { material } = p.target
+                && let Some(slot) = iors.get_mut(material as usize)
+            {
+                *slot = Some(param);
+            }
             match p.target {
                 Target::Albedo { material, .. }
                 | Target::Alpha { material }
@@ -88,11 +97,13 @@ impl ColourModel {
                 _ => {}
             }
         }
+        let turns_rays = iors.iter().any(Option::is_some);
         Self {
             materials,
             emission,
-            primary: geometric.filter(|_| crate::backprop::has_geometry(table)),
+            primary: geometric.filter(|_| crate::backprop::has_geometry(table) || turns_rays),
             scales,
+            iors,
         }
     }
 
@@ -132,6 +143,7 @@ impl ColourModel {
                 motion,
                 primary,
                 scales: &self.scales,
+                iors: &self.iors,
             };
             geo.gradient(record, &mut out, skipped);
         }

@@ -6,7 +6,7 @@
 
 use epsm_render::Scene;
 use epsm_render::lights::LightPoint;
-use epsm_render::materials::Lobe;
+use epsm_render::materials::{Bsdf, Lobe};
 use epsm_render::record::{PathRecord, TrianglePoint, VertexRecord};
 use glam::{DVec2, DVec3};
 
@@ -91,24 +91,29 @@ fn on_camera_ray(x1: &mut Placed, motion: &Motion) -> Result<(), DropReason> {
 }
 
 /// Moves vertex `next` along the ray a delta vertex `at` (reached from
-/// `prev`) scatters toward (see [`chain`]). Fails under total internal
+/// `prev`) scatters toward (see [`chain`]), with the relative IOR `eta`;
+/// `ior` is `(param, ∂eta/∂θ)` when a parameter sets the interface's IOR
+/// (the refracted ray then turns with it). Fails under total internal
 /// reflection or when the ray grazes `next`'s surface.
 fn on_scattered_ray(
     next: &mut Placed,
     at: &Placed,
     prev: &Placed,
     eta: f64,
+    ior: Option<(usize, f64)>,
     transmit: bool,
 ) -> Result<(), DropReason> {
     let params = [prev, at, &*next]
         .iter()
         .flat_map(|p| p.grads.iter().map(|g| g.0))
+        .chain(ior.map(|(k, _)| k))
         .collect();
     let mut grads = Vec::new();
     for k in sorted(params) {
         let (a, b, c) = (prev.d(k), at.d(k), next.d(k));
         let (wi, _) = toward(&b, &a);
-        let [r, dr] = chain::scattered(wi.w, wi.dw, b.n, b.dn, eta, transmit)
+        let deta = ior.filter(|(p, _)| *p == k).map_or(0.0, |(_, d)| d);
+        let [r, dr] = chain::scattered(wi.w, wi.dw, b.n, b.dn, [eta, deta], transmit)
             .ok_or(DropReason::TotalInternalReflection)?;
         let du = chain::ray_step(c.x - b.x, r, dr, c.dx - b.dx, next.dx_du)
             .ok_or(DropReason::Grazing)?;
@@ -131,8 +136,23 @@ pub(super) fn delta_lobe(v: &VertexRecord) -> Option<Lobe> {
 }
 
 impl Geometric<'_> {
+    /// `(param, ∂eta/∂θ)` at a refraction through `object` with relative
+    /// IOR `eta`, when a parameter sets the object's dielectric IOR `n`:
+    /// entering, `eta = n` and the rate is 1; leaving, `eta = 1/n` and the
+    /// rate is `−eta²`.
+    fn ior_rate(&self, object: u32, eta: f64) -> Option<(usize, f64)> {
+        let m = self.scene.objects().get(object as usize)?.material;
+        let param = (*self.iors.get(m as usize)?)?;
+        let Bsdf::Dielectric(d) = &self.scene.materials().get(m as usize)?.bsdf else {
+            return None;
+        };
+        let n = f64::from(d.ior);
+        let entering = (eta - n).abs() <= (eta - 1.0 / n).abs();
+        Some((param, if entering { 1.0 } else { -eta * eta }))
+    }
+
     /// Whether anything on the record moves (camera, a vertex's object, a
-    /// light).
+    /// light, a refracted ray whose IOR is a parameter).
     pub(super) fn moves(&self, record: &PathRecord) -> bool {
         let driven = |o: u32| {
             self.motion
@@ -140,8 +160,13 @@ impl Geometric<'_> {
                 .get(o as usize)
                 .is_some_and(|m| !m.grads.is_empty())
         };
+        let refracts_with_ior = |v: &VertexRecord| {
+            v.lobe.is_some_and(|l| l.is_delta() && l.is_transmission())
+                && self.ior_rate(v.at.object, f64::from(v.eta)).is_some()
+        };
         !self.motion.camera.grads.is_empty()
             || record.vertices.iter().any(|v| driven(v.at.object))
+            || record.vertices.iter().any(refracts_with_ior)
             || record.connections.iter().any(|c| match c.light {
                 LightPoint::Area { object, .. } => driven(object),
                 LightPoint::Point { index } => self
@@ -179,12 +204,15 @@ impl Geometric<'_> {
                     on_camera_ray(&mut p, self.motion)?;
                 }
             } else if let (true, Some(lobe)) = (on_rays, delta_lobe(&record.vertices[i - 1])) {
-                let eta = f64::from(record.vertices[i - 1].eta);
+                let at = &record.vertices[i - 1];
+                let eta = f64::from(at.eta);
+                let ior = self.ior_rate(at.at.object, eta);
                 on_scattered_ray(
                     &mut p,
                     &nodes[i],
                     &nodes[i - 1],
                     eta,
+                    ior.filter(|_| lobe.is_transmission()),
                     lobe.is_transmission(),
                 )?;
             }
