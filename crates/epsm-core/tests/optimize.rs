@@ -7,31 +7,13 @@ use std::path::Path;
 
 use epsm_core::problem::problem_from_str;
 use epsm_core::{Optimization, Problem};
+use epsm_testkit::problems::TINY_SETTINGS;
 
-/// The shared tiny scene (`tests/data/tiny-box.toml` at the workspace root:
-/// a grey box on a floor under an area light, seen from above at 32²).
-const TINY: &str = r#"
-scene_file = "../../tests/data/tiny-box.toml"
-
-[target]
-spp = 16
-
-[loss]
-kind = "ot_exact"
-match_resolution = [32, 32]
-
-[optimizer]
-iterations = 10
-lr = 0.1
-decay = 1.0
-
-[render]
-spp_primal = 2
-spp_grad = 2
-"#;
+/// The tiny problem's scene file, relative to this crate.
+const TINY_SCENE: &str = "../../tests/data/tiny-box.toml";
 
 fn tiny(params: &str) -> Problem {
-    let text = format!("{TINY}\n{params}");
+    let text = format!("scene_file = {TINY_SCENE:?}\n{TINY_SETTINGS}\n{params}");
     problem_from_str(
         &text,
         Path::new(env!("CARGO_MANIFEST_DIR"))

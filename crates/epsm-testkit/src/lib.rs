@@ -4,11 +4,13 @@
 //!   with the few geometric draws the tests use;
 //! - [`corpus`]: the runner that checks every file of a malformed-input
 //!   corpus is rejected with an error naming the file and the field;
-//! - [`scenes`]: scene files for tests of more than one crate;
+//! - [`scenes`] and [`problems`]: scene and problem files for tests of more
+//!   than one crate;
 //! - [`special`]: special files (a symlink to `/dev/zero`, a FIFO) where a
 //!   loader expects an input file, and a check that it refuses them in time.
 
 pub mod corpus;
+pub mod problems;
 mod rng;
 pub mod scenes;
 pub mod special;

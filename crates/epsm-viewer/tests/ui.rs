@@ -13,14 +13,13 @@ use std::time::Duration;
 use eframe::egui::Role;
 use egui_kittest::Harness;
 use egui_kittest::kittest::{NodeT, Queryable};
+use epsm_testkit::problems::TINY_SETTINGS;
 use epsm_viewer::worker::MAX_SPP;
 use epsm_viewer::{Options, ViewerApp};
 
-/// The tiny problem's settings over the shared tiny scene
-/// (`tests/data/tiny-box.toml` at the workspace root: a grey box on a floor
-/// under an area light, seen from above at 32²); the first parameter is a
-/// colour (no motion), the second a translation.
-const TINY: &str = r#"
+/// The tiny problem's parameters ([`TINY_SETTINGS`] over the shared tiny
+/// scene): the first is a colour (no motion), the second a translation.
+const TINY_PARAMETERS: &str = r#"
 [[parameters]]
 key = "floor.albedo.r"
 initial = 0.5
@@ -32,22 +31,6 @@ key = "box.translate.x"
 initial = 0.3
 true = 0.0
 bounds = [-1.0, 1.0]
-
-[target]
-spp = 16
-
-[loss]
-kind = "ot_exact"
-match_resolution = [32, 32]
-
-[optimizer]
-iterations = 10
-lr = 0.1
-decay = 1.0
-
-[render]
-spp_primal = 2
-spp_grad = 2
 "#;
 
 fn harness() -> Harness<'static, ViewerApp> {
@@ -93,7 +76,10 @@ fn open(h: &mut Harness<'static, ViewerApp>, path: &Path) {
 fn tiny_problem(dir: &Path) -> PathBuf {
     let path = dir.join("tiny.toml");
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/tiny-box.toml");
-    let text = format!("scene_file = {:?}\n{TINY}", scene.display().to_string());
+    let text = format!(
+        "scene_file = {:?}\n{TINY_PARAMETERS}\n{TINY_SETTINGS}",
+        scene.display().to_string()
+    );
     std::fs::write(&path, text).expect("write the tiny problem");
     path
 }

@@ -13,9 +13,9 @@ use std::path::PathBuf;
 use epsm_core::load_problem;
 use epsm_core::report::write_atomic;
 
-use super::optimize::{
-    Summary, apply_overrides, optimize, panels, problem_name, solved_word, start_images,
-};
+use super::optimize::figure::{panels, problem_name, start_images};
+use super::optimize::summary::{Summary, solved_word};
+use super::optimize::{apply_overrides, optimize};
 use super::plots::{Figure, Thumb, plot_figure};
 
 /// Arguments of `epsm compare`.

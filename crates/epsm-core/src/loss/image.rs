@@ -1,4 +1,4 @@
-//! Whole-image helpers: RMSE and box resampling.
+//! Whole-image measures: RMSE, and box resampling to another resolution.
 
 use epsm_render::Image;
 use glam::{DVec3, Vec3};

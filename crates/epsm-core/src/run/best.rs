@@ -15,7 +15,7 @@
 use epsm_render::Image;
 use serde::{Deserialize, Serialize};
 
-use super::{FINAL_JUDGE_FACTOR, Optimization};
+use super::{Optimization, render_image, stream_seed};
 use crate::loss::tone_map;
 
 /// The lowest judged loss so far and where it was met.
@@ -127,7 +127,29 @@ pub fn tail_mean(iterates: &[&[f64]]) -> Option<Vec<f64>> {
 /// Fewest iterates a tail mean averages.
 pub const MIN_TAIL: usize = 4;
 
+/// Salt of the judged render's stream (the same at every iteration).
+const JUDGE_SALT: u32 = 0x0B35_7E11;
+
+/// The final comparison of the best θ with the tail mean takes this many
+/// times the judge's samples.
+const FINAL_JUDGE_FACTOR: u32 = 4;
+
 impl Optimization {
+    /// The judged loss of the current θ.
+    pub(super) fn judged(&self) -> f64 {
+        self.judged_at(self.judge.spp)
+    }
+
+    /// The judged loss of the current θ with `spp` samples in all.
+    fn judged_at(&self, spp: u32) -> f64 {
+        let spp = (spp / 2).max(1);
+        let [a, b] = [JUDGE_SALT, JUDGE_SALT ^ 1].map(|salt| {
+            let seed = stream_seed(self.problem.optimizer.seed, 0, salt);
+            render_image(&self.grad.scene, spp, seed)
+        });
+        judged_loss(&a, &b, &self.target_match)
+    }
+
     /// Compares the mean θ of the L2 phase's last iterations (at most a
     /// quarter of the run, the final θ included; [`tail_mean`]) with
     /// the best θ so far under a finer judge ([`FINAL_JUDGE_FACTOR`] times

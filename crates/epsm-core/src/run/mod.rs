@@ -39,78 +39,33 @@ pub mod best;
 mod checkpoint;
 mod choose;
 mod error;
+mod gradient;
 pub mod noise;
 pub mod prdpt;
+mod view;
 
-use std::sync::{Mutex, PoisonError};
+use std::sync::Mutex;
 use std::time::Instant;
 
 use epsm_ot::MatchState;
-use epsm_render::record::PathRecord;
-use epsm_render::tracer::{RenderOptions, render, render_recorded};
+use epsm_render::tracer::{RenderOptions, render};
 use epsm_render::{Image, Scene};
 
 pub use best::{Best, Judge};
 pub use checkpoint::Checkpoint;
 use choose::choose;
 pub use error::{OptResult, OptimizeError};
+pub use gradient::GradientEval;
 
-use crate::backprop::{PassInput, PassStats, backprop, record_level};
-use crate::colour::{ColourModel, PrimaryMotion};
-use crate::loss::{LossEval, add_flow, evaluate, resample, rmse};
+use crate::loss::{resample, rmse};
 use crate::optim::{Adam, AdamSettings};
 use crate::params::ParamTable;
 use crate::problem::auto::{self, Choice};
-use crate::problem::{LossImage, Problem, Target};
+use crate::problem::{Problem, Target};
 use crate::report::{Row, Timings, param_error};
-use crate::schedule::{Method, PathUse, Schedule};
+use crate::schedule::{Method, Schedule};
 use prdpt::Smoothing;
-
-/// A scene and its parameter table (one per resolution).
-#[derive(Clone, Debug)]
-struct View {
-    scene: Scene,
-    table: ParamTable,
-}
-
-impl View {
-    fn new(problem: &Problem, width: u32, height: u32) -> OptResult<Self> {
-        let mut parts = problem.scene.clone();
-        parts.camera.width = width;
-        parts.camera.height = height;
-        let mut scene = Scene::new(parts)?;
-        let mut table = ParamTable::new(&scene);
-        for p in &problem.params {
-            table.add(&p.key)?;
-        }
-        // Driven objects get their own BVH instances now, so moving them
-        // rebuilds only the top level (not the static objects' BVH).
-        scene.set_dynamic(&table.moving_objects());
-        Ok(Self { scene, table })
-    }
-
-    fn set(&mut self, theta: &[f64]) {
-        for (k, v) in theta.iter().enumerate() {
-            self.table.set_value(k, *v);
-        }
-        self.table.apply(&mut self.scene);
-    }
-}
-
-/// The gradient at the current θ and what produced it.
-#[derive(Clone, Debug)]
-pub struct GradientEval {
-    /// `dL/dθ`, index order.
-    pub grad: Vec<f64>,
-    /// The loss at the match resolution, with its per-pixel gradients.
-    pub loss: LossEval,
-    /// The gradient-pass image (match resolution).
-    pub image: Image,
-    /// Path counts.
-    pub stats: PassStats,
-    /// Seconds of the trace, matching and solve parts.
-    pub timings: Timings,
-}
+use view::View;
 
 /// A running optimization.
 pub struct Optimization {
@@ -155,13 +110,6 @@ fn latest_switch(iterations: u32) -> u32 {
 fn stream_seed(seed: u32, iteration: u32, salt: u32) -> u32 {
     seed.wrapping_mul(0x9E37_79B9) ^ iteration.wrapping_mul(7919) ^ salt
 }
-
-/// Salt of the judged render's stream (the same at every iteration).
-const JUDGE_SALT: u32 = 0x0B35_7E11;
-
-/// The final comparison of the best θ with the tail mean takes this many
-/// times the judge's samples.
-const FINAL_JUDGE_FACTOR: u32 = 4;
 
 /// Salt of the `prdpt` method's perturbations; pair `i`'s renders use
 /// `PRDPT_SALT + 1 + i`.
@@ -326,108 +274,6 @@ impl Optimization {
 
     fn seed(&self, salt: u32) -> u32 {
         stream_seed(self.problem.optimizer.seed, self.iteration, salt)
-    }
-
-    /// The judged loss of the current θ ([`best`]).
-    fn judged(&self) -> f64 {
-        self.judged_at(self.judge.spp)
-    }
-
-    /// The judged loss of the current θ with `spp` samples in all.
-    fn judged_at(&self, spp: u32) -> f64 {
-        let spp = (spp / 2).max(1);
-        let [a, b] = [JUDGE_SALT, JUDGE_SALT ^ 1].map(|salt| {
-            let seed = stream_seed(self.problem.optimizer.seed, 0, salt);
-            render_image(&self.grad.scene, spp, seed)
-        });
-        best::judged_loss(&a, &b, &self.target_match)
-    }
-
-    /// `dL/dθ` at the current θ for the current iteration's loss and paths,
-    /// and the records it used.
-    /// With the `prdpt` method, the gradient of the smoothed L2 loss
-    /// ([`prdpt`]) and no records.
-    pub fn gradient(&self) -> OptResult<(GradientEval, Vec<PathRecord>)> {
-        if let Some(smoothing) = &self.smoothing {
-            return Ok((self.smoothed_gradient(smoothing)?, Vec::new()));
-        }
-        let l2 = !self.schedule.loss_at(self.iteration).is_ot();
-        // With the colour-flow term, an L2 iteration of the epsm method
-        // differentiates like an OT one: the flow term supplies what the
-        // pixel's colour gains as content (and its edges) moves across it,
-        // so the pixel's vertex moves with its surface and every path's
-        // screen motion counts.
-        let flow_l2 = l2
-            && self.problem.loss.flow == Some(true)
-            && self.problem.optimizer.method == Method::Epsm;
-        let use_ = if flow_l2 {
-            PathUse::All
-        } else {
-            self.schedule.paths_at(self.iteration)
-        };
-        let colour = ColourModel::new(
-            &self.grad.table,
-            &self.grad.scene,
-            (l2 && !flow_l2).then_some(PrimaryMotion::OnCameraRay),
-        );
-        let level = record_level(&self.grad.table, &self.grad.scene, &colour, use_);
-        let spp = self.problem.passes.spp_grad;
-        let t0 = Instant::now();
-        let opts = RenderOptions {
-            spp,
-            seed: self.seed(0),
-            ..RenderOptions::from_scene(&self.grad.scene)
-        };
-        let loss_image = self.problem.passes.loss_image(!l2);
-        let ((out, records), independent) = self.maybe_join(
-            || render_recorded(&self.grad.scene, &opts, level, &|_| {}),
-            || match loss_image {
-                LossImage::GradientPass => None,
-                LossImage::Independent(spp) => {
-                    Some(render_image(&self.grad.scene, spp, self.seed(2)))
-                }
-            },
-        );
-        let image = independent.unwrap_or_else(|| out.image.clone());
-        let t1 = Instant::now();
-        let kind = self.schedule.loss_at(self.iteration);
-        let warm = &mut *self.warm.lock().unwrap_or_else(PoisonError::into_inner);
-        let mut loss = evaluate(
-            kind,
-            &image,
-            &self.target_match,
-            self.problem.loss.lambda,
-            Some(warm),
-        )?;
-        if self.problem.loss.flow == Some(true) && (kind.is_ot() || flow_l2) {
-            add_flow(&image, &mut loss)?;
-        }
-        let t2 = Instant::now();
-        let input = PassInput {
-            scene: &self.grad.scene,
-            table: &self.grad.table,
-            colour: &colour,
-            loss: &loss,
-            spp,
-            use_,
-        };
-        let (grad, stats) = backprop(&input, &records);
-        let timings = Timings {
-            primal: 0.0,
-            trace: (t1 - t0).as_secs_f64(),
-            matching: (t2 - t1).as_secs_f64(),
-            solve: t2.elapsed().as_secs_f64(),
-        };
-        Ok((
-            GradientEval {
-                grad,
-                loss,
-                image: out.image,
-                stats,
-                timings,
-            },
-            records,
-        ))
     }
 
     /// Whether independent stages of an iteration run at the same time

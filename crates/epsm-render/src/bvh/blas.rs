@@ -29,8 +29,9 @@ use obvhs::cwbvh::CwBvh;
 use obvhs::cwbvh::builder::build_cwbvh_from_tris;
 use obvhs::triangle::Triangle;
 
+use super::box_test::BoxTest;
 use super::flat::{FlatBvh, FlatHit};
-use super::node::{BoxTest, TraceRay};
+use super::node::TraceRay;
 use super::triangle::PackedTriangle;
 use crate::scene::Mesh;
 

@@ -46,6 +46,8 @@
 
 mod batch;
 mod blas;
+mod box_test;
+mod cwbvh;
 mod flat;
 mod node;
 mod packet;
@@ -74,8 +76,8 @@ use crate::hit::{self, Hit, SurfacePoint};
 use crate::scene::{Mesh, Object, ObjectId, Surface};
 use blas::Blas;
 #[cfg(target_arch = "x86_64")]
-pub(crate) use node::{Avx, Avx2};
-pub(crate) use node::{BoxTest, Portable, SpheresFirst};
+pub(crate) use box_test::{Avx, Avx2};
+pub(crate) use box_test::{BoxTest, Portable, SpheresFirst};
 use tlas::{Instance, Tlas, Traced};
 use triangle::PackedTriangle;
 #[cfg(target_arch = "x86_64")]

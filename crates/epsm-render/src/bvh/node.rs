@@ -1,5 +1,6 @@
 //! Ray against the eight child boxes of a wide node ([`ChildBoxes`], used by
-//! the triangle BVHs of module `flat` and by the top level's CWBVH nodes).
+//! the triangle BVHs of module `flat` and by the top level's CWBVH nodes,
+//! module `cwbvh`).
 //!
 //! Model: Ylitie, Karras and Laine, "Efficient Incoherent Ray Traversal on
 //! GPUs Through Compressed Wide BVHs" (HPG 2017), as built by obvhs; the top
@@ -28,18 +29,15 @@
 //!   (inverted boxes) then count as entered: callers mask the children a
 //!   node has;
 //! - the eight child boxes are tested in one pass of 256-bit AVX operations
-//!   where the CPU has AVX ([`Avx`], detected at run time), else as two
-//!   halves of 128-bit operations ([`Portable`]); both do the same operations
+//!   where the CPU has AVX ([`Avx`](super::box_test::Avx), detected at run time), else as two
+//!   halves of 128-bit operations ([`Portable`](super::box_test::Portable)); both do the same operations
 //!   in the same order, so they give the same masks.
 //!
 //! No parameters.
 
 use glam::{Vec3A, Vec4};
 use obvhs::aabb::Aabb;
-use obvhs::cwbvh::CwBvh;
-use obvhs::cwbvh::node::{CwBvhNode, extract_byte64};
 
-use super::packet::{PacketHit, TrianglePacket};
 use super::triangle::RayShear;
 
 /// Widening of each box's exit distance: the slab distances `(plane − o)·inv`
@@ -155,66 +153,6 @@ const OCT_INV4: [u32; 8] = {
     table
 };
 
-/// A CWBVH node with its eight child boxes decompressed to exact `f32`
-/// planes ([`ChildBoxes`]), so the slab test converts no bytes. Field names
-/// follow obvhs's `CwBvhNode`.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct WideNode {
-    /// The child boxes.
-    boxes: ChildBoxes,
-    /// Index of the first inner child node.
-    pub child_base_idx: u32,
-    /// Index of the first leaf primitive slot.
-    pub primitive_base_idx: u32,
-    /// obvhs's per-child metadata (leaf primitive ranges, inner-child slots).
-    child_meta: [u8; 8],
-    /// Which children are inner nodes.
-    pub imask: u8,
-    /// Bit `c` set when child `c` exists.
-    present: u8,
-}
-
-impl WideNode {
-    /// `node` with exact child boxes `children` (ignored for empty slots).
-    fn new(node: &CwBvhNode, children: &[Aabb; 8]) -> Self {
-        let present = std::array::from_fn(|child| !node.is_child_empty(child));
-        Self {
-            boxes: ChildBoxes::new(children, present),
-            child_base_idx: node.child_base_idx,
-            primitive_base_idx: node.primitive_base_idx,
-            child_meta: node.child_meta,
-            imask: node.imask,
-            present: (0..8)
-                .filter(|&c| !node.is_child_empty(c))
-                .fold(0, |m, c| m | 1 << c),
-        }
-    }
-
-    /// The CWBVH hit mask of `ray` (octant code `oct_inv4`, see
-    /// [`TraceRay::oct_inv4`]) against the children, box tests by `boxes`:
-    /// bits 24..32 are inner children to visit (in traversal order),
-    /// bits 0..24 the leaf primitives to test (Ylitie et al.'s encoding, as
-    /// obvhs's `CwBvhNode::get_child_and_index_bits`).
-    #[inline(always)]
-    pub fn intersect(&self, ray: &TraceRay, oct_inv4: u32, boxes: impl BoxTest) -> u32 {
-        let mut hit_children = boxes.hits(&self.boxes, ray).mask & u32::from(self.present);
-        let meta8 = u64::from_le_bytes(self.child_meta);
-        let oct_inv8 = u64::from(oct_inv4) * 0x1_0000_0001;
-        let inner8 = ((meta8 & (meta8 << 1)) & 0x1010_1010_1010_1010) >> 4;
-        let bit_index8 = (meta8 ^ (oct_inv8 & (inner8 * 0xff))) & 0x1f1f_1f1f_1f1f_1f1f;
-        let child_bits8 = (meta8 >> 5) & 0x0707_0707_0707_0707;
-        // One iteration per child hit (a loop over set bits mispredicts once,
-        // a test per child up to eight times).
-        let mut hit_mask = 0u32;
-        while hit_children != 0 {
-            let child = hit_children.trailing_zeros() as usize;
-            hit_children &= hit_children - 1;
-            hit_mask |= extract_byte64(child_bits8, child) << extract_byte64(bit_index8, child);
-        }
-        hit_mask
-    }
-}
-
 /// Eight `f32` lanes, one per child, aligned for one 256-bit load.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(32))]
@@ -271,7 +209,7 @@ impl ChildBoxes {
     /// The boxes `ray` enters within its `t` range, four children at a time
     /// with 128-bit vectors (SSE2 on x86-64).
     #[inline(always)]
-    fn hits_4x2(&self, ray: &TraceRay) -> BoxHits {
+    pub(super) fn hits_4x2(&self, ray: &TraceRay) -> BoxHits {
         let mut mask = 0u32;
         let mut entry = Lanes8([0.0; 8]);
         for half in 0..2 {
@@ -300,7 +238,7 @@ impl ChildBoxes {
     #[target_feature(enable = "avx")]
     #[inline]
     #[allow(unsafe_code)]
-    fn hits_8(&self, ray: &TraceRay) -> BoxHits {
+    pub(super) fn hits_8(&self, ray: &TraceRay) -> BoxHits {
         use std::arch::x86_64::{
             __m256, _CMP_LE_OS, _mm256_cmp_ps, _mm256_load_ps, _mm256_max_ps, _mm256_min_ps,
             _mm256_movemask_ps, _mm256_mul_ps, _mm256_set1_ps, _mm256_store_ps, _mm256_sub_ps,
@@ -335,192 +273,10 @@ impl ChildBoxes {
     }
 }
 
-/// How a node's eight child boxes, and the triangle packets of its leaves,
-/// are tested against a ray, and where a trace tests a scene's listed exact
-/// spheres.
-pub(crate) trait BoxTest: Copy {
-    /// The children whose boxes the ray enters within its `t` range and
-    /// their entry distances (absent children count as entered: the caller
-    /// masks them).
-    fn hits(self, boxes: &ChildBoxes, ray: &TraceRay) -> BoxHits;
-
-    /// The closest hit of `ray` within its `t` range among the lanes of
-    /// `packet` in `lanes` (bit `i` for lane `i`), in the order of
-    /// [`TrianglePacket::intersect_4x2`].
-    fn packet_hit(self, packet: &TrianglePacket, ray: &TraceRay, lanes: u32) -> Option<PacketHit>;
-
-    /// Whether a trace tests the listed exact spheres inline before the
-    /// static BVH's walk ([`SpheresFirst`]) rather than out of line after
-    /// it. Both find the same hit; the choice is the compiled code's.
-    #[inline(always)]
-    fn spheres_first(self) -> bool {
-        false
-    }
-}
-
-/// The tests of `B`, with a scene's listed exact spheres tested inline
-/// before the static BVH's walk, their result kept aside until the walk
-/// ends (a sphere's `f64` solve then overlaps the walk instead of following
-/// its last branch). The tile loop of a scene that lists spheres is
-/// compiled with it; that of a scene without keeps no state of theirs live
-/// across the walk (inlined there, the test cost scenes without spheres
-/// 1.5 % more instructions).
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct SpheresFirst<B>(pub B);
-
-impl<B: BoxTest> BoxTest for SpheresFirst<B> {
-    #[inline(always)]
-    fn hits(self, boxes: &ChildBoxes, ray: &TraceRay) -> BoxHits {
-        self.0.hits(boxes, ray)
-    }
-
-    #[inline(always)]
-    fn packet_hit(self, packet: &TrianglePacket, ray: &TraceRay, lanes: u32) -> Option<PacketHit> {
-        self.0.packet_hit(packet, ray, lanes)
-    }
-
-    #[inline(always)]
-    fn spheres_first(self) -> bool {
-        true
-    }
-}
-
-/// Box and packet tests with 128-bit vectors, on every CPU.
-#[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct Portable;
-
-impl BoxTest for Portable {
-    #[inline(always)]
-    fn hits(self, boxes: &ChildBoxes, ray: &TraceRay) -> BoxHits {
-        boxes.hits_4x2(ray)
-    }
-
-    #[inline(always)]
-    fn packet_hit(self, packet: &TrianglePacket, ray: &TraceRay, lanes: u32) -> Option<PacketHit> {
-        packet.intersect_4x2(ray, lanes)
-    }
-}
-
-/// Box and packet tests with 256-bit AVX vectors; a value exists only on a
-/// CPU with AVX (see [`Avx::detect`]). Same masks and hits as [`Portable`].
-#[cfg(target_arch = "x86_64")]
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Avx(());
-
-#[cfg(target_arch = "x86_64")]
-impl Avx {
-    /// The token, when the CPU has AVX.
-    #[inline(always)]
-    pub fn detect() -> Option<Self> {
-        std::arch::is_x86_feature_detected!("avx").then_some(Self(()))
-    }
-
-    /// The token on a CPU with AVX-512 (which has AVX).
-    #[inline(always)]
-    pub fn from_avx512(_: crate::simd::Avx512) -> Self {
-        Self(())
-    }
-}
-
-/// The tracer's CPU level: AVX2 and the bit-manipulation extensions every
-/// AVX2 CPU has (BMI1, BMI2, LZCNT, POPCNT), with [`Avx`] box tests. A value
-/// exists only on a CPU with all of them (see [`Avx2::detect`]), so code
-/// compiled with `#[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]`
-/// may be called while one is held. The tile loop and
-/// [`Accel::closest_hit`](super::Accel::closest_hit) both walk with this
-/// build where the CPU has it, and with [`Portable`] tests elsewhere.
-#[cfg(target_arch = "x86_64")]
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Avx2(Avx);
-
-#[cfg(target_arch = "x86_64")]
-impl Avx2 {
-    /// The token, when the CPU has AVX, AVX2, BMI1, BMI2, LZCNT and POPCNT.
-    #[inline(always)]
-    pub fn detect() -> Option<Self> {
-        let avx = Avx::detect()?;
-        (std::arch::is_x86_feature_detected!("avx2")
-            && std::arch::is_x86_feature_detected!("bmi1")
-            && std::arch::is_x86_feature_detected!("bmi2")
-            && std::arch::is_x86_feature_detected!("lzcnt")
-            && std::arch::is_x86_feature_detected!("popcnt"))
-        .then_some(Self(avx))
-    }
-
-    /// Its AVX box and packet tests.
-    #[inline(always)]
-    pub fn boxes(self) -> Avx {
-        self.0
-    }
-}
-
-#[cfg(target_arch = "x86_64")]
-impl BoxTest for Avx {
-    #[inline(always)]
-    #[allow(unsafe_code)]
-    fn hits(self, boxes: &ChildBoxes, ray: &TraceRay) -> BoxHits {
-        // SAFETY: an `Avx` is only made by `Avx::detect` after finding AVX
-        // on this CPU, which is all `hits_8` requires.
-        unsafe { boxes.hits_8(ray) }
-    }
-
-    #[inline(always)]
-    #[allow(unsafe_code)]
-    fn packet_hit(self, packet: &TrianglePacket, ray: &TraceRay, lanes: u32) -> Option<PacketHit> {
-        // SAFETY: as `hits`: `intersect_8_outlined` requires only AVX.
-        unsafe { packet.intersect_8_outlined(ray, lanes) }
-    }
-}
-
-/// A CWBVH of [`WideNode`]s.
-#[derive(Clone, Debug, Default)]
-pub(crate) struct WideBvh {
-    /// The nodes, root first.
-    pub nodes: Vec<WideNode>,
-}
-
-impl WideBvh {
-    /// The nodes of `bvh` with exact child boxes (tighter than its 8-bit
-    /// quantised ones), from the box of each leaf primitive slot (`leaf_box`).
-    pub fn new(bvh: &CwBvh, leaf_box: impl Fn(u32) -> Aabb) -> Self {
-        let nodes = bvh.nodes.iter().zip(exact_child_boxes(bvh, leaf_box));
-        Self {
-            nodes: nodes
-                .map(|(node, children)| WideNode::new(node, &children))
-                .collect(),
-        }
-    }
-
-    /// Heap size in bytes.
-    pub fn bytes(&self) -> usize {
-        self.nodes.len() * size_of::<WideNode>()
-    }
-}
-
-/// Per node of `bvh`, the exact boxes of its eight children (empty for
-/// absent children), from the box of each leaf primitive slot (`leaf_box`).
-pub(crate) fn exact_child_boxes(bvh: &CwBvh, leaf_box: impl Fn(u32) -> Aabb) -> Vec<[Aabb; 8]> {
-    // Children come after their parent in obvhs's layout: go bottom-up.
-    let mut node_box = vec![Aabb::empty(); bvh.nodes.len()];
-    let mut child_boxes = vec![[Aabb::empty(); 8]; bvh.nodes.len()];
-    for (i, node) in bvh.nodes.iter().enumerate().rev() {
-        for child in (0..8).filter(|&c| !node.is_child_empty(c)) {
-            let aabb = if node.is_leaf(child) {
-                let (start, count) = node.child_primitives(child);
-                (start..start + count).fold(Aabb::empty(), |b, s| b.union(&leaf_box(s)))
-            } else {
-                node_box[node.child_node_index(child) as usize]
-            };
-            child_boxes[i][child] = aabb;
-            node_box[i] = node_box[i].union(&aabb);
-        }
-    }
-    child_boxes
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::bvh::box_test::{Avx, BoxTest, Portable};
     use epsm_testkit::Rng;
 
     /// The reference slab test: per axis, the distances to the planes the

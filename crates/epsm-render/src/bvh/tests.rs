@@ -4,7 +4,7 @@
 use super::trace::exact_sphere_hit;
 use super::*;
 #[cfg(target_arch = "x86_64")]
-use crate::bvh::node::Avx;
+use crate::bvh::Avx;
 use crate::ray::Ray;
 use crate::sphere;
 use epsm_testkit::Rng;

@@ -30,7 +30,7 @@ use obvhs::BvhBuildParams;
 use obvhs::aabb::Aabb;
 use obvhs::cwbvh::builder::build_cwbvh;
 
-use super::node::WideBvh;
+use super::cwbvh::WideBvh;
 use crate::hit::Placement;
 use crate::scene::ObjectId;
 

@@ -4,10 +4,11 @@
 
 use glam::{DVec3, Vec3A};
 
-use super::flat::FlatHit;
 #[cfg(target_arch = "x86_64")]
-use super::node::Avx2;
-use super::node::{BoxTest, Portable, SpheresFirst, TraceRay};
+use super::box_test::Avx2;
+use super::box_test::{BoxTest, Portable, SpheresFirst};
+use super::flat::FlatHit;
+use super::node::TraceRay;
 use super::tlas::Traced;
 use super::walk::walk;
 use super::{Accel, Found, NO_WORLD_INDEX};

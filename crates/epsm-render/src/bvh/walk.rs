@@ -17,7 +17,9 @@
 
 use std::mem::MaybeUninit;
 
-use super::node::{BoxTest, TraceRay, WideBvh};
+use super::box_test::BoxTest;
+use super::cwbvh::WideBvh;
+use super::node::TraceRay;
 
 /// Capacity of the traversal stack, in node groups.
 const STACK: usize = 32;

@@ -7,8 +7,6 @@
 //! Moving one object with [`Scene::set_object_transform`] refits only the top
 //! level of the BVH and that object's emitter table.
 
-#[cfg(test)]
-pub(crate) mod load;
 pub mod mesh;
 
 use std::path::PathBuf;

@@ -36,3 +36,14 @@ pub fn run(cmd: &BenchCommand) -> anyhow::Result<()> {
         BenchCommand::Iteration(a) => iteration::run(a),
     }
 }
+
+/// CPU time used so far by all threads of this process, seconds (Linux:
+/// the first field of each `/proc/self/task/*/schedstat`, nanoseconds).
+fn cpu_seconds() -> Option<f64> {
+    let mut total = 0u64;
+    for task in std::fs::read_dir("/proc/self/task").ok()? {
+        let stat = std::fs::read_to_string(task.ok()?.path().join("schedstat")).ok()?;
+        total += stat.split_whitespace().next()?.parse::<u64>().ok()?;
+    }
+    Some(total as f64 * 1e-9)
+}

@@ -8,7 +8,7 @@ use std::time::Instant;
 use epsm_render::tracer::{Kernel, RenderOptions, render_with};
 use epsm_scene::load::{MAX_DEPTH, load_scene};
 
-use super::rays::cpu_seconds;
+use super::cpu_seconds;
 
 /// Arguments of `epsm bench render`.
 #[derive(clap::Args, Debug)]

@@ -14,8 +14,9 @@
 
 use glam::{Vec2, Vec3, Vec3A};
 
+use super::super::box_test::BoxTest;
 use super::super::flat::{FlatBvh, FlatHit};
-use super::super::node::{BoxTest, TraceRay};
+use super::super::node::TraceRay;
 use super::super::{Accel, Found, NO_WORLD_INDEX};
 use super::Rays16;
 use crate::frame::Frame;

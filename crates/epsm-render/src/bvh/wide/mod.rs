@@ -36,9 +36,10 @@
 //! may report the other. Within a node the scalar packet test's rule is
 //! kept (so a BVH of one node, as `scenes/cornell-box.toml`'s, has no such
 //! difference); occlusion has none (any hit will do), nor has a sphere
-//! tying with a triangle (the sphere wins both ways). The tests count these
-//! ties: none on the rays of renders of the shipped scenes, 2 of 40 k lanes
-//! in their random scenes, all on rays aimed at vertices.
+//! tying with a triangle (the sphere wins both ways). The unit tests count
+//! these ties (2 of 40 k lanes in their random scenes, all on rays aimed at
+//! vertices); `tests/wide.rs` bounds them on the rays of renders of the
+//! shipped scenes through the batch walks (none in the Cornell box).
 //!
 //! The tables (module `tree`: 64 bytes per static triangle and 704 per
 //! node with up to sixteen leaf triangles; module `points`: 128 bytes per

@@ -38,6 +38,8 @@
 //! `cargo run --release -p epsm-cli -- bench rays --json`
 //! `cargo run --release -p epsm-cli -- bench rays --scene scenes/caustic-box.toml`
 
+mod measure;
+mod report;
 mod scene;
 
 use std::path::PathBuf;
@@ -51,8 +53,8 @@ use epsm_render::tracer::{RenderOptions, render_logged};
 use epsm_render::{Camera, Ray};
 use epsm_scene::load::load_scene;
 use glam::{DVec3, Vec2};
-use rayon::prelude::*;
-use serde::Serialize;
+use measure::{Run, Walk, measure};
+use report::{Report, Throughput, print};
 
 /// Most triangles of the sphere (about 1.5 GB with its BVH).
 const MAX_TRIANGLES: usize = 1 << 22;
@@ -62,9 +64,6 @@ const MAX_RAYS: usize = 1 << 25;
 const MAX_SPP: u32 = 4096;
 /// Most rays a logged render may cast (32 bytes each: 4 GB).
 const MAX_LOGGED_RAYS: u64 = 1 << 27;
-/// Shortest timed run: a run walks its ray set again until this long
-/// has passed, and reports the time per pass.
-const MIN_RUN_SECONDS: f64 = 0.2;
 
 /// Options of `epsm bench rays`.
 #[derive(clap::Args, Debug)]
@@ -91,58 +90,6 @@ pub struct RaysBenchArgs {
     /// Print one JSON object instead of text.
     #[arg(long)]
     pub json: bool,
-}
-
-/// Throughput of one ray set on one thread count.
-#[derive(Serialize)]
-struct Throughput {
-    threads: usize,
-    /// The ray set.
-    rays: &'static str,
-    /// Rays in the set.
-    count: usize,
-    query: &'static str,
-    mrays_per_s: f64,
-    /// Rays per CPU-second of the process (Linux only): the rate per busy
-    /// core, insensitive to other processes taking the cores.
-    mrays_per_cpu_s: Option<f64>,
-    hit_fraction: f64,
-    /// With `--scene`: the same rays through the batch walks
-    /// (`Accel::closest_hits`, `Accel::occluded_rays`), else absent.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    batched_mrays_per_s: Option<f64>,
-    /// The batch walks' rays per CPU-second (with `--scene`).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    batched_mrays_per_cpu_s: Option<f64>,
-    /// The batch walks' fraction of hits (with `--scene`; the scalar one
-    /// but for ties, see `Accel::closest_hits`).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    batched_hit_fraction: Option<f64>,
-}
-
-/// Everything measured.
-#[derive(Serialize)]
-struct Report {
-    /// The scene file whose rays were walked (`--scene`), else absent.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    scene: Option<String>,
-    /// Samples per pixel of the logged render (`--scene`), else absent.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    spp: Option<u32>,
-    triangles: usize,
-    /// Exact spheres (`shape = "sphere"` with `exact = true`).
-    spheres: usize,
-    instances: usize,
-    build_seconds: f64,
-    /// Moving one instance and updating the top level (the sphere only).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    tlas_update_seconds: Option<f64>,
-    accel_bytes: usize,
-    /// Whether the batch walks ran sixteen rays at a time (the CPU has
-    /// AVX-512; with `--scene`, else absent).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    batched_wide: Option<bool>,
-    throughput: Vec<Throughput>,
 }
 
 /// One set of rays to walk, and how.
@@ -346,131 +293,6 @@ fn throughputs(
         }
     }
     Ok(throughput)
-}
-
-fn print(report: &Report, json: bool) -> anyhow::Result<()> {
-    if json {
-        println!("{}", serde_json::to_string(report)?);
-        return Ok(());
-    }
-    if let (Some(scene), Some(spp)) = (&report.scene, report.spp) {
-        println!("{scene}: the rays of a render at {spp} spp");
-    }
-    let update = report
-        .tlas_update_seconds
-        .map(|s| format!(", TLAS update {:.1} µs", s * 1e6))
-        .unwrap_or_default();
-    println!(
-        "{} triangles, {} exact sphere(s), {} instances: build {:.1} ms{update}, {:.1} MB",
-        report.triangles,
-        report.spheres,
-        report.instances,
-        report.build_seconds * 1e3,
-        report.accel_bytes as f64 / 1e6
-    );
-    if let Some(wide) = report.batched_wide {
-        let how = if wide {
-            "16 rays at a time (AVX-512)"
-        } else {
-            "one at a time (no AVX-512)"
-        };
-        println!("batched: the same rays through Accel::closest_hits / occluded_rays, {how}");
-    }
-    for t in &report.throughput {
-        let batched = t
-            .batched_mrays_per_s
-            .map(|b| {
-                format!(
-                    "; batched {:6.2} Mrays/s, {:6.2} Mrays/CPU-s ({:.0}% hit)",
-                    b,
-                    t.batched_mrays_per_cpu_s.unwrap_or(f64::NAN),
-                    t.batched_hit_fraction.unwrap_or(f64::NAN) * 100.0
-                )
-            })
-            .unwrap_or_default();
-        println!(
-            "{} thread(s) {:>10} {:>8}: {:6.2} Mrays/s, {:6.2} Mrays/CPU-s ({:.0}% hit, {} rays){batched}",
-            t.threads,
-            t.rays,
-            t.query,
-            t.mrays_per_s,
-            t.mrays_per_cpu_s.unwrap_or(f64::NAN),
-            t.hit_fraction * 100.0,
-            t.count
-        );
-    }
-    Ok(())
-}
-
-/// One timed pass over a ray set.
-#[derive(Clone, Copy)]
-struct Run {
-    seconds: f64,
-    cpu_seconds: Option<f64>,
-    hits: usize,
-}
-
-/// CPU time used so far by all threads of this process, seconds (Linux:
-/// the first field of each `/proc/self/task/*/schedstat`, nanoseconds).
-pub(super) fn cpu_seconds() -> Option<f64> {
-    let mut total = 0u64;
-    for task in std::fs::read_dir("/proc/self/task").ok()? {
-        let stat = std::fs::read_to_string(task.ok()?.path().join("schedstat")).ok()?;
-        total += stat.split_whitespace().next()?.parse::<u64>().ok()?;
-    }
-    Some(total as f64 * 1e-9)
-}
-
-/// How a set of rays is walked.
-#[derive(Clone, Copy)]
-struct Walk {
-    /// Occlusion (`true`) or closest hit.
-    occlusion: bool,
-    /// Through the batch walks (`Accel::closest_hits`,
-    /// `Accel::occluded_rays`) rather than ray by ray.
-    batched: bool,
-}
-
-/// The hits among `chunk` by `walk`.
-fn hits_of(accel: &Accel, chunk: &[Ray], walk: Walk) -> usize {
-    match (walk.occlusion, walk.batched) {
-        (true, false) => chunk.iter().filter(|ray| accel.occluded(ray)).count(),
-        (false, false) => chunk
-            .iter()
-            .filter(|ray| accel.closest_hit(ray).is_some())
-            .count(),
-        (true, true) => accel.occluded_rays(chunk).iter().filter(|&&o| o).count(),
-        (false, true) => accel.closest_hits(chunk).iter().flatten().count(),
-    }
-}
-
-/// Traces all rays in parallel chunks, in passes over the whole set until
-/// [`MIN_RUN_SECONDS`] have passed (a set of a few milliseconds, such as a
-/// small render's camera rays, would otherwise time thread start-up more
-/// than walks).
-fn measure(accel: &Accel, rays: &[Ray], walk: Walk) -> Run {
-    let cpu_start = cpu_seconds();
-    let start = Instant::now();
-    let (mut passes, mut hits) = (0u32, 0);
-    while passes == 0 || start.elapsed().as_secs_f64() < MIN_RUN_SECONDS {
-        hits = rays
-            .par_chunks(1024)
-            .map(|chunk| hits_of(accel, chunk, walk))
-            .sum();
-        passes += 1;
-    }
-    let seconds = start.elapsed().as_secs_f64() / f64::from(passes);
-    // The kernel updates a running thread's total at scheduler ticks (a few
-    // ms), so very short runs may read zero: report nothing then.
-    let cpu_seconds = cpu_seconds()
-        .zip(cpu_start)
-        .map(|(end, start)| (end - start) / f64::from(passes))
-        .filter(|&c| c > 0.0);
-    Run {
-        seconds,
-        cpu_seconds,
-        hits,
-    }
 }
 
 /// Mean time of moving one instance and updating the top level, seconds.

@@ -1,14 +1,14 @@
 //! Every lane of the wide walks and shading points against the scalar
-//! functions, bit for bit: on random scenes (module `random`) and on the
-//! rays of renders of the shipped scenes (module `shipped`). Run on every
-//! backend the CPU has (the portable one always).
+//! functions, bit for bit, on random scenes (module `random`), on every
+//! backend the CPU has (the portable one always). The shipped scenes are
+//! checked from outside the crate, where their loader is (`tests/wide.rs`:
+//! their images per backend, and the batch walks on their rays).
 //!
 //! A lane's closest hit may differ from the scalar one only by a tie: both
 //! hits on different primitives at the same `t` to within a few ULPs
 //! (module docs of `wide`). Ties are counted, and the tests bound them.
 
 mod random;
-mod shipped;
 
 use super::Hits16;
 use super::Rays16;

@@ -20,19 +20,21 @@
 //! tolerance (`ot_unconverged_solves` in `run.csv`) prints a warning on
 //! standard error, once per run, naming the problem's `loss.blur`.
 
+pub mod figure;
+pub mod summary;
+
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use epsm_core::loss::LossKind;
-use std::fmt::Write as _;
-
-use epsm_core::report::{Timings, csv, mean_timings, param_error, write_atomic};
+use epsm_core::report::{csv, mean_timings, param_error, write_atomic};
 use epsm_core::{Method, Optimization, Problem, load_problem};
 use epsm_render::Image;
 use epsm_scene::image_io::{read_image, write_image};
 
-use super::plots::{Figure, Panel, Series, Thumb, plot_figure};
 use crate::progress;
+use figure::plot_report;
+use summary::{CurvePoint, Summary, best_origin, solved_word, summary_csv};
 
 /// Arguments of `epsm optimize`.
 #[derive(clap::Args, Debug)]
@@ -58,52 +60,6 @@ pub struct OptimizeArgs {
     /// (checked after each iteration; the iteration count still caps it).
     #[arg(long, value_name = "SECONDS")]
     pub time_budget: Option<f64>,
-}
-
-/// How a run ended.
-pub struct Summary {
-    /// Parameter error at the best θ (when true values are known): what
-    /// the run delivers.
-    pub param_error: Option<f64>,
-    /// Parameter error at the last θ.
-    pub last_param_error: Option<f64>,
-    /// The iteration whose θ was judged best.
-    pub best_iteration: u32,
-    /// How many iterates the best θ is the mean of (0: one iterate).
-    pub best_averaged: u32,
-    /// The problem's tolerance on the parameter error.
-    pub tolerance: Option<f64>,
-    /// Whether the best θ's parameter error is within the tolerance (when
-    /// both are known).
-    pub solved: Option<bool>,
-    /// RMSE of the final render (best θ) against the target.
-    pub image_rmse: f64,
-    /// Iterations run.
-    pub iterations: u32,
-    /// Wall seconds of the optimization.
-    pub wall_s: f64,
-    /// Mean seconds per iteration of the primal render, the gradient-pass
-    /// trace, the matching and the solves.
-    pub per_iteration: Timings,
-    /// One point per iteration.
-    pub curve: Vec<CurvePoint>,
-    /// The target image.
-    pub target: Image,
-    /// The render at the initial θ (absent when a resumed run's
-    /// `initial.exr` cannot be read).
-    pub initial: Option<Image>,
-    /// The render at the final θ.
-    pub last: Image,
-}
-
-/// One iteration's errors, for plots.
-pub struct CurvePoint {
-    /// Wall seconds since the start.
-    pub wall_s: f64,
-    /// Image RMSE against the target.
-    pub image_rmse: f64,
-    /// Parameter error, when known.
-    pub param_error: Option<f64>,
 }
 
 /// Applies the command-line overrides to a loaded problem.
@@ -164,54 +120,6 @@ pub fn run(args: &OptimizeArgs) -> anyhow::Result<()> {
         out.display()
     );
     Ok(())
-}
-
-/// Where the best θ comes from: `iteration 12`, or `mean of the last 10
-/// iterates`.
-pub fn best_origin(iteration: u32, averaged: u32) -> String {
-    if averaged > 0 {
-        format!("mean of the last {averaged} iterates")
-    } else {
-        format!("iteration {iteration}")
-    }
-}
-
-/// `yes`, `no` or `n/a` (no tolerance or no true values).
-pub fn solved_word(solved: Option<bool>) -> &'static str {
-    match solved {
-        Some(true) => "yes",
-        Some(false) => "no",
-        None => "n/a",
-    }
-}
-
-/// `summary.csv`: one header line and one row (see the module doc).
-fn summary_csv(keys: &[String], s: &Summary, best: &[f64], last: &[f64]) -> String {
-    let number = |x: Option<f64>| x.map(|e| format!("{e:e}")).unwrap_or_default();
-    let mut out = String::from(
-        "iterations,wall_s,image_rmse,best_iteration,best_averaged,best_param_error,last_param_error,tolerance,solved",
-    );
-    for k in keys {
-        let _ = write!(out, ",best {k},last {k}");
-    }
-    let _ = write!(
-        out,
-        "\n{},{:.3},{:e},{},{},{},{},{},{}",
-        s.iterations,
-        s.wall_s,
-        s.image_rmse,
-        s.best_iteration,
-        s.best_averaged,
-        number(s.param_error),
-        number(s.last_param_error),
-        number(s.tolerance),
-        solved_word(s.solved)
-    );
-    for (b, l) in best.iter().zip(last) {
-        let _ = write!(out, ",{b},{l}");
-    }
-    out.push('\n');
-    out
 }
 
 fn save(out: &Path, name: &str, img: &Image) -> anyhow::Result<()> {
@@ -348,84 +256,6 @@ pub fn optimize(
     let text = summary_csv(&keys, &summary, &best, &last);
     write_atomic(&out.join("summary.csv"), text.as_bytes())?;
     let method = opt.problem().optimizer.method.name();
-    let mut strip = start_images(&summary);
-    strip.push(Thumb {
-        label: "final".into(),
-        image: summary.last.clone(),
-    });
-    let errors = match (
-        summary.curve.first().and_then(|c| c.param_error),
-        summary.param_error,
-    ) {
-        (Some(first), Some(last)) => format!(", parameter error {first:.3} to {last:.3}"),
-        _ => String::new(),
-    };
-    let figure = Figure {
-        title: format!(
-            "{}: {method}, {} iterations in {:.1} s{errors}",
-            problem_name(problem_file),
-            summary.iterations,
-            summary.wall_s
-        ),
-        panels: &panels(&[(method.to_owned(), &summary)]),
-        strip: &strip,
-    };
-    plot_figure(&out.join("report.png"), &figure)?;
+    plot_report(&out.join("report.png"), problem_file, method, &summary)?;
     Ok(summary)
-}
-
-/// The name of a problem in titles and tables: its file's stem.
-pub fn problem_name(file: &Path) -> String {
-    file.file_stem()
-        .and_then(|s| s.to_str())
-        .unwrap_or("problem")
-        .to_owned()
-}
-
-/// The first images of a figure's strip: the target and, when known, the
-/// initial render.
-pub fn start_images(s: &Summary) -> Vec<Thumb> {
-    let mut strip = vec![Thumb {
-        label: "target".into(),
-        image: s.target.clone(),
-    }];
-    if let Some(image) = &s.initial {
-        strip.push(Thumb {
-            label: "initial".into(),
-            image: image.clone(),
-        });
-    }
-    strip
-}
-
-/// The two panels of a report: image RMSE and parameter error against time.
-pub fn panels(runs: &[(String, &Summary)]) -> Vec<Panel> {
-    let series = |f: &dyn Fn(&CurvePoint) -> Option<f64>| {
-        runs.iter()
-            .map(|(name, s)| Series {
-                name: name.clone(),
-                points: s
-                    .curve
-                    .iter()
-                    .filter_map(|c| f(c).map(|y| (c.wall_s, y)))
-                    .collect(),
-            })
-            .collect()
-    };
-    let mut out = vec![Panel {
-        title: "image RMSE".into(),
-        y_label: "RMSE (linear RGB)".into(),
-        series: series(&|c| Some(c.image_rmse)),
-    }];
-    if runs
-        .iter()
-        .any(|(_, s)| s.curve.iter().any(|c| c.param_error.is_some()))
-    {
-        out.push(Panel {
-            title: "parameter error".into(),
-            y_label: "RMS of θ − θ_true".into(),
-            series: series(&|c| c.param_error),
-        });
-    }
-    out
 }
