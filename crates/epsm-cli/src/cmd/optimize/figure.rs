@@ -8,7 +8,8 @@ use crate::cmd::plots::{Figure, Panel, Series, Thumb, plot_figure};
 
 /// Draws `report.png` of a run of `method` on the problem in
 /// `problem_file` into `path`: the image RMSE and parameter error panels
-/// and the target, initial and final images.
+/// and the target, initial, best-θ and (when it differs) last-iterate
+/// images.
 pub(super) fn plot_report(
     path: &Path,
     problem_file: &Path,
@@ -17,9 +18,15 @@ pub(super) fn plot_report(
 ) -> anyhow::Result<()> {
     let mut strip = start_images(summary);
     strip.push(Thumb {
-        label: "final".into(),
+        label: "best".into(),
         image: summary.last.clone(),
     });
+    if let Some(image) = &summary.last_iterate {
+        strip.push(Thumb {
+            label: "last iterate".into(),
+            image: image.clone(),
+        });
+    }
     let errors = match (
         summary.curve.first().and_then(|c| c.param_error),
         summary.param_error,

@@ -5,7 +5,7 @@
 //! parameter errors, the tolerance and whether the problem is solved),
 //! `target`, `initial` and `final` images (`.png` sRGB and `.exr` linear;
 //! `final` at the best θ), `report.png` (image RMSE and parameter error
-//! against wall-clock seconds, and the target, initial and final images,
+//! against wall-clock seconds, and the target, initial, best-θ and last-iterate images,
 //! titled with the problem and the method), `checkpoint.json` every
 //! `output.checkpoint_every` iterations and at the end (`--resume DIR`
 //! continues from it).
@@ -222,6 +222,7 @@ pub fn optimize(
             (b.theta.clone(), b.iteration, b.averaged)
         });
     let wall_s = opt.checkpoint().wall_s;
+    let last_iterate = (last != best).then(|| opt.render(preview_spp));
     opt.set_theta(&best);
     let final_image = opt.render(preview_spp);
     save(out, "final", &final_image)?;
@@ -252,6 +253,7 @@ pub fn optimize(
         target: opt.target().clone(),
         initial,
         last: final_image,
+        last_iterate,
     };
     let text = summary_csv(&keys, &summary, &best, &last);
     write_atomic(&out.join("summary.csv"), text.as_bytes())?;

@@ -38,8 +38,11 @@ pub struct Summary {
     /// The render at the initial θ (absent when a resumed run's
     /// `initial.exr` cannot be read).
     pub initial: Option<Image>,
-    /// The render at the final θ.
+    /// The render at the best θ (`final.exr`).
     pub last: Image,
+    /// The render at the last iterate, when it differs from the best θ
+    /// (shown in `report.png` only).
+    pub last_iterate: Option<Image>,
 }
 
 /// One iteration's errors, for plots.
