@@ -141,41 +141,38 @@ fn flow_rule(targets: &[Target], scene: &Scene) -> (bool, String) {
             "a camera parameter is optimized: the whole image moves".into(),
         );
     }
-    let geometric: Vec<&Target> = targets.iter().filter(|t| is_geometric(t)).collect();
-    if geometric.is_empty() {
+    let light = (
+        false,
+        "a light moves: its shading changes, not only moves".to_owned(),
+    );
+    let mut moving = Vec::new();
+    for t in targets.iter().filter(|t| is_geometric(t)) {
+        let (Target::Translate { object, .. }
+        | Target::Rotate { object, .. }
+        | Target::Scale { object }) = *t
+        else {
+            return light;
+        };
+        if scene
+            .objects()
+            .get(object as usize)
+            .is_none_or(|o| o.emission.is_some())
+        {
+            return light;
+        }
+        moving.push(object);
+    }
+    if moving.is_empty() {
         return (false, "no geometric parameter".into());
     }
     let seen = directly_seen(scene);
-    for t in geometric {
-        let object = match *t {
-            Target::Translate { object, .. }
-            | Target::Rotate { object, .. }
-            | Target::Scale { object } => object,
-            _ => {
-                return (
-                    false,
-                    "a light moves: its shading changes, not only moves".into(),
-                );
-            }
-        };
-        let light = scene
-            .objects()
-            .get(object as usize)
-            .is_none_or(|o| o.emission.is_some());
-        if light {
-            return (
-                false,
-                "a light moves: its shading changes, not only moves".into(),
-            );
-        }
-        if !seen.contains(&object) {
-            return (
-                false,
-                "a moving object is not seen directly (only its shadows, reflections or \
-                 refractions)"
-                    .into(),
-            );
-        }
+    if moving.iter().any(|o| !seen.contains(o)) {
+        return (
+            false,
+            "a moving object is not seen directly (only its shadows, reflections or \
+             refractions)"
+                .into(),
+        );
     }
     (
         true,
@@ -187,10 +184,11 @@ fn flow_rule(targets: &[Target], scene: &Scene) -> (bool, String) {
 /// first.
 fn directly_seen(scene: &Scene) -> HashSet<ObjectId> {
     let cam = scene.camera();
+    let rays = cam.film_rays();
     let mut seen = HashSet::new();
     for y in 0..cam.height {
         for x in 0..cam.width {
-            let ray = cam.ray(Vec2::new(x as f32 + 0.5, y as f32 + 0.5));
+            let ray = rays.ray(Vec2::new(x as f32 + 0.5, y as f32 + 0.5));
             if let Some(hit) = scene.accel().closest_hit(&ray) {
                 seen.insert(hit.object);
             }

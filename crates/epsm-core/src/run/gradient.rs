@@ -47,9 +47,8 @@ impl Optimization {
         // pixel's colour gains as content (and its edges) moves across it,
         // so the pixel's vertex moves with its surface and every path's
         // screen motion counts.
-        let flow_l2 = l2
-            && self.problem.loss.flow == Some(true)
-            && self.problem.optimizer.method == Method::Epsm;
+        let flow = self.problem.loss.flow == Some(true);
+        let flow_l2 = l2 && flow && self.problem.optimizer.method == Method::Epsm;
         let use_ = if flow_l2 {
             PathUse::All
         } else {
@@ -89,7 +88,7 @@ impl Optimization {
             self.problem.loss.lambda,
             Some(warm),
         )?;
-        if self.problem.loss.flow == Some(true) && (kind.is_ot() || flow_l2) {
+        if flow && (kind.is_ot() || flow_l2) {
             add_flow(&image, &mut loss)?;
         }
         let t2 = Instant::now();
