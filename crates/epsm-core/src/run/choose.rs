@@ -1,6 +1,7 @@
 //! The run's automatic choices, made once when it starts: step sizes, the
 //! colour-flow term, the decay, the matched render's samples, the hybrid
-//! switch and the judge of the best θ, each recorded with its reason.
+//! switch, the late phase and the judge of the best θ, each recorded with
+//! its reason.
 
 use std::collections::HashSet;
 
@@ -18,8 +19,8 @@ use crate::schedule::{Method, Schedule};
 
 /// Makes the run's automatic choices for `problem` (resolving its
 /// `None` settings in place, recording each in `choices`): the step sizes,
-/// the colour-flow term, the decay, the matched render's samples and the
-/// hybrid switch.
+/// the colour-flow term, the decay, the matched render's samples, the
+/// hybrid switch and the late phase.
 /// Returns the schedule and the judge of θ.
 pub(super) fn choose(
     problem: &mut Problem,
