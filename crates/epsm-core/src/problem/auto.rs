@@ -8,6 +8,7 @@
 //! | `optimizer.decay` | `(1/`[`FINAL_LR_DIVISOR`]`)^(1/iterations)`: the last step is 1/20 of the first |
 //! | `optimizer.beta1` | [`BETA1`] |
 //! | `optimizer.beta2` | [`beta2`]: 0.9 when every parameter is a material value, else 0.999 |
+//! | `render.late_samples` | [`late_samples`]: when every parameter is a material value, the second half of the run's gradient passes and matched renders take [`LATE_FACTOR`] times their samples |
 //! | `loss.flow` | on when a camera parameter is optimized, or every geometric parameter moves a non-emissive object seen directly (`crate::run`) |
 //!
 //! The hybrid switch and the matched render's samples are chosen when the
@@ -32,6 +33,44 @@ pub const BETA1: f64 = 0.5;
 /// 0.9, 0.9996).
 pub fn beta2(material_only: bool) -> f64 {
     if material_only { 0.9 } else { 0.999 }
+}
+
+/// The first iteration of the late phase, as a fraction of the iterations
+/// ([`late_samples`]).
+pub const LATE_FROM: f64 = 0.5;
+
+/// How many times its samples the gradient pass and the matched render take
+/// in the late phase ([`late_samples`]).
+pub const LATE_FACTOR: u32 = 8;
+
+/// A late phase of a run: from iteration `from` on, the gradient pass and
+/// the matched render take `factor` times their samples
+/// ([`super::Passes::at`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LateSamples {
+    /// The first iteration of the late phase.
+    pub from: u32,
+    /// The factor on the samples per pixel.
+    pub factor: u32,
+}
+
+/// The late phase of a run of `iterations` whose parameters are all
+/// material values (`material_only`), from [`LATE_FROM`] of the run on with
+/// [`LATE_FACTOR`] times the samples; `None` for other runs.
+///
+/// A material run is L2 throughout, and near the optimum its gradient is
+/// the noise of a few bright paths (small lights seen through glossy
+/// panels): Adam's normalized steps then scatter θ by a few step lengths
+/// per noise spike, and θ ends where the last spikes left it. More samples
+/// per pass shrink the spikes once the error is small; the first half,
+/// where the gradient's signal exceeds its noise, keeps the cheap passes.
+/// Geometric runs are left as they are (their OT phase and switch are
+/// tuned to the base samples).
+pub fn late_samples(material_only: bool, iterations: u32) -> Option<LateSamples> {
+    material_only.then(|| LateSamples {
+        from: (f64::from(iterations) * LATE_FROM).round() as u32,
+        factor: LATE_FACTOR,
+    })
 }
 
 /// The first learning rate of a parameter is `CROSSING × scale /
@@ -183,6 +222,39 @@ mod tests {
         let d = decay(40);
         assert!((d.powi(40) - 1.0 / FINAL_LR_DIVISOR).abs() < 1e-12);
         assert!(d > 0.9 && d < 1.0);
+    }
+
+    #[test]
+    fn only_material_runs_get_a_late_phase_with_more_samples() {
+        assert_eq!(late_samples(false, 40), None);
+        let late = late_samples(true, 40).expect("material run");
+        assert_eq!(
+            late,
+            LateSamples {
+                from: 20,
+                factor: LATE_FACTOR
+            }
+        );
+        let passes = super::super::Passes {
+            spp_primal: 4,
+            spp_grad: 4,
+            spp_match: Some(128),
+            late: Some(late),
+        };
+        assert_eq!(passes.at(19), passes);
+        let later = passes.at(20);
+        assert_eq!(
+            (later.spp_primal, later.spp_grad, later.spp_match),
+            (4, 4 * LATE_FACTOR, Some(128 * LATE_FACTOR))
+        );
+        assert_eq!(passes.at(39), later);
+        // A matched render of 0 (the gradient pass's image) stays 0.
+        let own = super::super::Passes {
+            spp_match: Some(0),
+            ..passes
+        }
+        .at(30);
+        assert_eq!((own.spp_grad, own.spp_match), (4 * LATE_FACTOR, Some(0)));
     }
 
     #[test]

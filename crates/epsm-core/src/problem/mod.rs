@@ -136,6 +136,10 @@ pub struct Passes {
     /// [`Passes::loss_image`]); `None`: automatic, from the noise measured
     /// when the run starts.
     pub spp_match: Option<u32>,
+    /// The late phase's extra samples ([`Passes::at`]); `None` until the
+    /// run's automatic choices are made, and for runs without one
+    /// ([`auto::late_samples`]).
+    pub late: Option<auto::LateSamples>,
 }
 
 /// Which image an iteration's loss compares with the target.
@@ -167,6 +171,20 @@ impl Passes {
             (Some(spp), _) => LossImage::Independent(spp),
             (None, true) => LossImage::GradientPass,
             (None, false) => LossImage::Independent(self.spp_grad),
+        }
+    }
+
+    /// The samples of iteration `iteration`: these passes, with the
+    /// gradient pass's and the matched render's samples multiplied by the
+    /// late phase's factor from its first iteration on.
+    pub fn at(&self, iteration: u32) -> Passes {
+        match self.late {
+            Some(late) if iteration >= late.from => Passes {
+                spp_grad: self.spp_grad.saturating_mul(late.factor),
+                spp_match: self.spp_match.map(|s| s.saturating_mul(late.factor)),
+                ..*self
+            },
+            _ => *self,
         }
     }
 }
@@ -233,6 +251,7 @@ impl Problem {
                 spp_primal: render.spp_primal,
                 spp_grad: render.spp_grad,
                 spp_match: render.spp_match,
+                late: None,
             },
             out_dir: PathBuf::from(output.dir),
             checkpoint_every: output.checkpoint_every,

@@ -276,6 +276,7 @@ pub(super) fn problem(
                 .spp_match
                 .map(|v| c.count("render.spp_match", v, 0, 1 << 16))
                 .transpose()?,
+            late: None,
         },
         out_dir: d.output.dir.clone().into(),
         checkpoint_every: d.output.checkpoint_every,

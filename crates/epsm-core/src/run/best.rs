@@ -71,9 +71,18 @@ impl Judge {
 /// the expected tone-mapped render and the target (it can be slightly
 /// negative at the optimum). All three images have the same size.
 pub fn judged_loss(a: &Image, b: &Image, target: &Image) -> f64 {
-    let n = (3 * a.pixels.len().max(1)) as f64;
-    let sum: f64 = a
-        .pixels
+    mean_loss(&judged_pixels(a, b, target))
+}
+
+/// The judged loss ([`judged_loss`]) of per-pixel sums ([`judged_pixels`]).
+fn mean_loss(pixels: &[f64]) -> f64 {
+    pixels.iter().sum::<f64>() / (3 * pixels.len().max(1)) as f64
+}
+
+/// [`judged_loss`] pixel by pixel: the sum over the three channels of
+/// `(a − t)(b − t)`, row-major.
+pub fn judged_pixels(a: &Image, b: &Image, target: &Image) -> Vec<f64> {
+    a.pixels
         .iter()
         .zip(&b.pixels)
         .zip(&target.pixels)
@@ -85,8 +94,26 @@ pub fn judged_loss(a: &Image, b: &Image, target: &Image) -> f64 {
                 })
                 .sum::<f64>()
         })
-        .sum();
-    sum / n
+        .collect()
+}
+
+/// Standard errors by which one θ's judged loss must undercut another's to
+/// count as lower ([`clearly_lower`]).
+pub const SIGNIFICANCE: f64 = 2.0;
+
+/// Whether the per-pixel judged losses `lower` ([`judged_pixels`]) are
+/// lower than `other` (the same pixels, judged under the same noise)
+/// beyond the judge's noise: their mean paired difference exceeds
+/// [`SIGNIFICANCE`] standard errors of the per-pixel differences.
+pub fn clearly_lower(lower: &[f64], other: &[f64]) -> bool {
+    let d: Vec<f64> = other.iter().zip(lower).map(|(o, l)| o - l).collect();
+    if d.len() < 2 {
+        return false;
+    }
+    let n = d.len() as f64;
+    let mean = d.iter().sum::<f64>() / n;
+    let var = d.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    mean > SIGNIFICANCE * (var / n).sqrt()
 }
 
 impl Best {
@@ -142,26 +169,38 @@ impl Optimization {
 
     /// The judged loss of the current θ with `spp` samples in all.
     fn judged_at(&self, spp: u32) -> f64 {
+        mean_loss(&self.judged_pixels_at(spp))
+    }
+
+    /// The per-pixel judged losses ([`judged_pixels`]) of the current θ
+    /// with `spp` samples in all.
+    fn judged_pixels_at(&self, spp: u32) -> Vec<f64> {
         let spp = (spp / 2).max(1);
         let [a, b] = [JUDGE_SALT, JUDGE_SALT ^ 1].map(|salt| {
             let seed = stream_seed(self.problem.optimizer.seed, 0, salt);
             render_image(&self.grad.scene, spp, seed)
         });
-        judged_loss(&a, &b, &self.target_match)
+        judged_pixels(&a, &b, &self.target_match)
     }
 
-    /// Compares the mean θ of the L2 phase's last iterations (at most a
-    /// quarter of the run, the final θ included; [`tail_mean`]) with
-    /// the best θ so far under a finer judge ([`FINAL_JUDGE_FACTOR`] times
-    /// the samples: near the optimum the two differ by less than the
-    /// regular judge's noise) and keeps the better. θ is left at the final
-    /// iterate.
+    /// Compares the mean θ of the L2 phase's last iterations ([`tail_mean`])
+    /// with the best θ so far under a finer judge ([`FINAL_JUDGE_FACTOR`]
+    /// times the samples: near the optimum the two differ by less than the
+    /// regular judge's noise). θ is left at the final iterate.
+    ///
+    /// Without a late phase ([`crate::problem::auto::late_samples`]) the
+    /// mean spans at most the last quarter of the run (the final θ
+    /// included) and the lower judged loss wins. With one, the mean spans
+    /// the late phase and is the result unless the best θ's judged loss is
+    /// lower beyond the judge's noise ([`clearly_lower`]): there the
+    /// iterates scatter about the optimum by less than the judge resolves,
+    /// and a single iterate the judge prefers is as often off by the
+    /// judge's own noise.
     pub(super) fn offer_tail_mean(&mut self) {
+        let late = self.problem.passes.late;
         let quarter = self.schedule.iterations.div_ceil(4);
-        let from = self
-            .schedule
-            .switch()
-            .max(self.iteration.saturating_sub(quarter));
+        let from = late.map_or_else(|| self.iteration.saturating_sub(quarter), |l| l.from);
+        let from = self.schedule.switch().max(from);
         let iterates: Vec<&[f64]> = (self.rows.iter())
             .filter(|r| r.iteration >= from)
             .map(|r| r.theta.as_slice())
@@ -173,19 +212,30 @@ impl Optimization {
         };
         let last = self.theta.clone();
         let fine = self.judge.spp * FINAL_JUDGE_FACTOR;
+        let mut best_pixels = None;
         if let Some(b) = self.best.clone() {
             self.set_theta(&b.theta);
+            let pixels = self.judged_pixels_at(fine);
             self.best = Some(Best {
-                loss: self.judged_at(fine),
+                loss: mean_loss(&pixels),
                 ..b
             });
+            best_pixels = Some(pixels);
         }
         self.set_theta(&mean);
-        let loss = self.judged_at(fine);
-        if Best::offer(&mut self.best, self.iteration, &self.theta, loss)
-            && let Some(b) = self.best.as_mut()
-        {
-            b.averaged = averaged;
+        let pixels = self.judged_pixels_at(fine);
+        let loss = mean_loss(&pixels);
+        let kept = match (late, &best_pixels) {
+            (Some(_), Some(best)) => !clearly_lower(best, &pixels),
+            _ => self.best.as_ref().is_none_or(|b| loss < b.loss),
+        };
+        if kept {
+            self.best = Some(Best {
+                iteration: self.iteration,
+                averaged,
+                theta: self.theta.clone(),
+                loss,
+            });
         }
         self.set_theta(&last);
     }
@@ -217,6 +267,25 @@ mod tests {
         assert_eq!(tail_mean(&[&a, &b, &a, &b]), Some(vec![2.0, 2.0]));
         assert_eq!(tail_mean(&[&a, &b, &a]), None);
         assert_eq!(tail_mean(&[]), None);
+    }
+
+    #[test]
+    fn a_lower_loss_counts_only_beyond_the_judges_noise() {
+        // Pixel differences of mean 1 and spread ±1 over 100 pixels: the
+        // standard error is 0.1, so the mean difference is 10 of them.
+        let other: Vec<f64> = (0..100).map(|i| 5.0 + f64::from(i % 2)).collect();
+        let lower: Vec<f64> = (0..100)
+            .map(|i| 4.0 + 2.0 * f64::from(i % 2) - 0.5)
+            .collect();
+        assert!(clearly_lower(&lower, &other));
+        assert!(!clearly_lower(&other, &lower));
+        // The same mean difference under noise twenty times wider is not
+        // resolved.
+        let noisy: Vec<f64> = (0..100)
+            .map(|i| other[i as usize] - 1.0 + if i % 2 == 0 { 20.0 } else { -20.0 })
+            .collect();
+        assert!(!clearly_lower(&noisy, &other));
+        assert!(!clearly_lower(&[1.0], &[2.0]));
     }
 
     #[test]

@@ -1,6 +1,7 @@
 //! The run's automatic choices, made once when it starts: step sizes, the
 //! colour-flow term, the decay, the matched render's samples, the hybrid
-//! switch and the judge of the best θ, each recorded with its reason.
+//! switch, the late phase and the judge of the best θ, each recorded with
+//! its reason.
 
 use std::collections::HashSet;
 
@@ -14,12 +15,12 @@ use super::{View, latest_switch, stream_seed, window};
 use crate::params::Target;
 use crate::problem::Problem;
 use crate::problem::auto::{self, Choice, is_camera, is_geometric};
-use crate::schedule::Schedule;
+use crate::schedule::{Method, Schedule};
 
 /// Makes the run's automatic choices for `problem` (resolving its
 /// `None` settings in place, recording each in `choices`): the step sizes,
-/// the colour-flow term, the decay, the matched render's samples and the
-/// hybrid switch.
+/// the colour-flow term, the decay, the matched render's samples, the
+/// hybrid switch and the late phase.
 /// Returns the schedule and the judge of θ.
 pub(super) fn choose(
     problem: &mut Problem,
@@ -116,6 +117,29 @@ pub(super) fn choose(
             Schedule::on_plateau(o.method, kind, n, w, latest)
         }
     };
+    if o.method != Method::Prdpt
+        && let Some(late) = auto::late_samples(!targets.iter().any(is_geometric), n)
+    {
+        problem.passes.late = Some(late);
+        let matched = problem
+            .passes
+            .spp_match
+            .filter(|&s| s > 0)
+            .unwrap_or(spp_grad);
+        let why = format!(
+            "every parameter is a material value: from iteration {} on the gradient pass takes \
+             {} spp and the matched render {} spp, so that the noise of a few bright paths \
+             scatters θ less near the optimum",
+            late.from,
+            spp_grad * late.factor,
+            matched * late.factor,
+        );
+        choices.push(Choice::new(
+            "render.late_samples",
+            format!("{}x from iteration {}", late.factor, late.from),
+            why,
+        ));
+    }
     let judge = Judge::new(n, problem.passes.spp_match.unwrap_or(0), spp_grad);
     let why = format!(
         "θ judged every {} iterations and at the end on two independent renders of {} spp in \

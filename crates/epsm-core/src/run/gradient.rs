@@ -60,14 +60,15 @@ impl Optimization {
             (l2 && !flow_l2).then_some(PrimaryMotion::OnCameraRay),
         );
         let level = record_level(&self.grad.table, &self.grad.scene, &colour, use_);
-        let spp = self.problem.passes.spp_grad;
+        let passes = self.problem.passes.at(self.iteration);
+        let spp = passes.spp_grad;
         let t0 = Instant::now();
         let opts = RenderOptions {
             spp,
             seed: self.seed(0),
             ..RenderOptions::from_scene(&self.grad.scene)
         };
-        let loss_image = self.problem.passes.loss_image(!l2);
+        let loss_image = passes.loss_image(!l2);
         let ((out, records), independent) = self.maybe_join(
             || render_recorded(&self.grad.scene, &opts, level, &|_| {}),
             || match loss_image {

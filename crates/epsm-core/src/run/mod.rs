@@ -4,11 +4,12 @@
 //!
 //! When the run starts, the settings the problem left automatic are chosen
 //! ([`Optimization::choices`]): the colour-flow term, the learning-rate
-//! decay, the matched render's samples ([`noise`]) and the hybrid switch
-//! ([`crate::schedule::Plateau`]). Every few iterations θ is judged on an
-//! independent render and the best is kept ([`best`]); with
-//! `optimizer.stop` the run ends once that judgement stops improving in the
-//! L2 phase.
+//! decay, the matched render's samples ([`noise`]), the hybrid switch
+//! ([`crate::schedule::Plateau`]) and, for material-only runs, the late
+//! phase's extra samples ([`crate::problem::auto::late_samples`]). Every
+//! few iterations θ is judged on an independent render and the best is
+//! kept ([`best`]); with `optimizer.stop` the run ends once that judgement
+//! stops improving in the L2 phase.
 //!
 //! Every random stream is keyed by the problem's seed and the iteration, so
 //! a run resumed from a checkpoint follows the same θ trajectory as one that
