@@ -16,9 +16,10 @@
 //!   meets the light's tangent plane at `y`; the residual is that point
 //!   minus `y`, in two tangent coordinates of the plane.
 //! - Newton's method on `ω` (two tangent coordinates around the current
-//!   direction): the 2×2 Jacobian by central differences of shots, the step
+//!   direction): the 2×2 Jacobian by forward differences of shots, the step
 //!   halved until the residual falls, converged below
-//!   [`TOLERANCE`] × `|y − x|`.
+//!   [`TOLERANCE`] × `|y − x|`; at the solution the Jacobian again, by
+//!   central differences, for the geometry term.
 //!
 //! The estimate is the chain's path contribution over the light sample's
 //! area density:
@@ -57,20 +58,24 @@ use crate::ray::Ray;
 use crate::record::{ChainRecord, ConnectionRecord, TrianglePoint, VertexRecord};
 use crate::scene::{ObjectId, Scene};
 
-/// Most dielectric interfaces a chain crosses (and most crossings the seed
-/// counts along `x → y`).
+/// Most dielectric interfaces a chain crosses (and most crossings a seed
+/// counts).
 pub(super) const MAX_INTERFACES: usize = 8;
 /// Newton converges when the shot lands within this fraction of `|y − x|` of `y`.
-pub(super) const TOLERANCE: f32 = 1e-5;
+pub(super) const TOLERANCE: f32 = 2e-6;
 /// Newton iterations before a seed counts as a miss.
-const MAX_ITERATIONS: usize = 20;
+const MAX_ITERATIONS: usize = 12;
+/// Halvings of a Newton step before the seed counts as a miss.
+const HALVINGS: usize = 6;
+/// The residual must fall at least to this fraction of its value per step.
+const PROGRESS: f64 = 0.99;
 /// Step of the central differences of the Jacobian, in tangent units of the
 /// unit direction (radians, to first order).
 const FD_STEP: f32 = 1e-3;
 /// `1 − cos` of the largest angle between a BSDF-sampled direction and the
-/// chain's for both to be the same path (about 1.4 mrad): far above Newton's
-/// tolerance, far below the angle between distinct chains.
-const SAME_DIRECTION: f32 = 1e-6;
+/// chain's for both to be the same path (about 4.5 mrad): far above what
+/// Newton's tolerance leaves, far below the angle between distinct chains.
+const SAME_DIRECTION: f32 = 1e-5;
 
 /// A non-delta vertex that made manifold next-event estimation, and the
 /// direction its BSDF sample left along.
@@ -82,6 +87,8 @@ pub(super) struct ChainOrigin {
     pub(super) wi_ng: f32,
     /// The unit world direction sampled there.
     pub(super) dir: Vec3,
+    /// The most refractions its connections took (the depth limit's).
+    pub(super) interfaces: usize,
 }
 
 /// Where a path stands with respect to the paths manifold next-event
@@ -130,9 +137,18 @@ impl ChainState {
         boxes: impl BoxTest,
     ) -> bool {
         match self {
-            Self::Refracting(o, k) if *k > 0 => {
-                covers(scene, &o.sp, o.wi_ng, o.dir, *k, sp.p, sp.ng, object, boxes)
-            }
+            Self::Refracting(o, k) if *k > 0 => covers(
+                scene,
+                &o.sp,
+                o.wi_ng,
+                o.dir,
+                *k,
+                sp.p,
+                sp.ng,
+                object,
+                o.interfaces,
+                boxes,
+            ),
             _ => false,
         }
     }
@@ -175,7 +191,8 @@ impl Plane {
 }
 
 /// Counts the dielectric surfaces the segment from `sp` to `y` crosses
-/// (passing through any other surface), up to [`MAX_INTERFACES`] + 1.
+/// (passing through any other surface), up to [`MAX_INTERFACES`] + 1; `wo_ng`
+/// is the segment direction's cosine with `sp`'s geometric normal.
 fn seed_interfaces(
     scene: &Scene,
     sp: &SurfacePoint,
@@ -281,22 +298,32 @@ fn residual(
     shoot(scene, sp, dir, k, plane, boxes).map(|s| plane.coords(s.end))
 }
 
-/// `∂(plane coordinates)/∂(a, b)` at `dir = normalize(dir + a·s + b·t)`,
-/// by central differences, with the tangents `(s, t)` of `dir`; columns.
+/// `∂(plane coordinates)/∂(a, b)` at `dir = normalize(dir + a·s + b·t)`
+/// with the tangents `(s, t)` of `dir`, as columns: by forward differences
+/// from the residual `r0` at `dir` (Newton's steps), or by central ones
+/// (`central`: the geometry term of the solution).
+#[allow(clippy::too_many_arguments)] // the shot's inputs, the difference kind
 fn jacobian(
     scene: &Scene,
     sp: &SurfacePoint,
     dir: Vec3,
     k: usize,
     plane: &Plane,
+    r0: DVec2,
+    central: bool,
     boxes: impl BoxTest,
 ) -> Option<(DVec2, DVec2, Vec3, Vec3)> {
     let f = crate::frame::Frame::from_normal(dir);
     let at = |d: Vec3| residual(scene, sp, d.normalize(), k, plane, boxes);
     let h = FD_STEP;
-    let ja = (at(dir + f.s * h)? - at(dir - f.s * h)?) / (2.0 * h as f64);
-    let jb = (at(dir + f.t * h)? - at(dir - f.t * h)?) / (2.0 * h as f64);
-    Some((ja, jb, f.s, f.t))
+    let column = |t: Vec3| -> Option<DVec2> {
+        if central {
+            Some((at(dir + t * h)? - at(dir - t * h)?) / (2.0 * h as f64))
+        } else {
+            Some((at(dir + t * h)? - r0) / h as f64)
+        }
+    };
+    Some((column(f.s)?, column(f.t)?, f.s, f.t))
 }
 
 /// Solves for the chain from `sp`, starting along the unit `seed` toward the
@@ -317,9 +344,10 @@ fn solve(
     let mut dir = seed;
     let mut r = residual(scene, sp, dir, k, plane, boxes)?;
     for _ in 0..MAX_ITERATIONS {
-        let (ja, jb, s, t) = jacobian(scene, sp, dir, k, plane, boxes)?;
+        let converged = r.length() < tol;
+        let (ja, jb, s, t) = jacobian(scene, sp, dir, k, plane, r, converged, boxes)?;
         let det = ja.x * jb.y - jb.x * ja.y;
-        if r.length() < tol {
+        if converged {
             return (det.is_finite() && det != 0.0).then_some((dir, det.abs()));
         }
         if !det.is_finite() || det == 0.0 {
@@ -328,12 +356,14 @@ fn solve(
         // δ = −J⁻¹ r.
         let da = -(jb.y * r.x - jb.x * r.y) / det;
         let db = -(-ja.y * r.x + ja.x * r.y) / det;
+        // The step, halved until the residual falls to at most
+        // `PROGRESS` of its value (a seed without a chain stops here).
         let mut scale = 1.0;
         let mut stepped = None;
-        for _ in 0..6 {
+        for _ in 0..HALVINGS {
             let d = (dir + s * (da * scale) as f32 + t * (db * scale) as f32).normalize();
             if let Some(rn) = residual(scene, sp, d, k, plane, boxes)
-                && rn.length() < r.length()
+                && rn.length() < PROGRESS * r.length()
             {
                 stepped = Some((d, rn));
                 break;
@@ -358,13 +388,20 @@ struct Found {
     light: SurfacePoint,
 }
 
+impl Found {
+    fn interfaces(&self) -> impl Iterator<Item = &Interface> {
+        self.shot.interfaces.iter().flatten()
+    }
+}
+
 /// The chain from the surface point `sp` (whose incoming direction has
 /// cosine `wi_ng` with its geometric normal) to the point `y` of the light
-/// `object`, with normal `n_y`, through `k ≤ max_interfaces` dielectric
-/// refractions seeded by the segment `sp → y`: `Ok(None)` when the segment
-/// crosses no glass or too much, `Err(())` when seeded but not found. A
-/// function of `(sp, y)` alone, so that BSDF sampling can tell whether a path
-/// it found is this one ([`covers`]).
+/// `object`, with normal `n_y`, through the `k ≤ max_interfaces` dielectric
+/// surfaces the segment `sp → y` crosses (seeded by that segment):
+/// `Ok(None)` when it crosses none (next-event estimation counts the light,
+/// or an opaque surface blocks it) or too many, `Err(())` when seeded but not
+/// found. A function of `(sp, y)` alone, so that BSDF sampling can tell
+/// whether a path it found is this one ([`covers`]).
 #[allow(clippy::too_many_arguments)] // the vertex, the light point, the box test
 fn connect(
     scene: &Scene,
@@ -378,8 +415,10 @@ fn connect(
 ) -> Result<Option<Found>, ()> {
     let to_y = y - sp.p;
     let dist = to_y.length();
-    let wo = to_y / dist;
-    let k = seed_interfaces(scene, sp, wo.dot(sp.ng), y, boxes);
+    let Some(seed) = to_y.try_normalize() else {
+        return Ok(None);
+    };
+    let k = seed_interfaces(scene, sp, seed.dot(sp.ng), y, boxes);
     if k == 0 || k > max_interfaces.min(MAX_INTERFACES) {
         return Ok(None);
     }
@@ -390,31 +429,46 @@ fn connect(
         v: f.t,
         n: n_y,
     };
-    let (dir, det) = solve(scene, sp, wo, dist, k, &plane, boxes).ok_or(())?;
+    solve_chain(scene, sp, wi_ng, seed, dist, k, &plane, object, boxes)
+        .map(Some)
+        .ok_or(())
+}
+
+/// One chain from `seed`, checked: it leaves on the side `wi_ng` says and
+/// its last segment reaches the front face of the light `object`.
+#[allow(clippy::too_many_arguments)] // the vertex, the seed, the light, the box test
+fn solve_chain(
+    scene: &Scene,
+    sp: &SurfacePoint,
+    wi_ng: f32,
+    seed: Vec3,
+    dist: f32,
+    k: usize,
+    plane: &Plane,
+    object: ObjectId,
+    boxes: impl BoxTest,
+) -> Option<Found> {
+    let (dir, det) = solve(scene, sp, seed, dist, k, plane, boxes)?;
     if dir.dot(sp.ng) * wi_ng <= 0.0 {
-        return Err(());
+        return None;
     }
-    let shot = shoot(scene, sp, dir, k, &plane, boxes).ok_or(())?;
-    // The last segment must reach the light's front face unblocked.
-    let hit = scene
-        .accel()
-        .closest_hit_with(&shot.last, boxes)
-        .ok_or(())?;
+    let shot = shoot(scene, sp, dir, k, plane, boxes)?;
+    let hit = scene.accel().closest_hit_with(&shot.last, boxes)?;
     let light = scene.accel().surface_point(scene.objects(), &hit);
     if hit.object != object || shot.last.dir.dot(light.ng) >= 0.0 {
-        return Err(());
+        return None;
     }
-    Ok(Some(Found {
+    Some(Found {
         dir,
         det,
         shot,
         hit,
         light,
-    }))
+    })
 }
 
-/// Whether the chain [`connect`] finds from `sp` to the emitter point `y`
-/// (normal `n_y`, on `object`) leaves `sp` along `dir` through `k`
+/// Whether the chain [`connect`] finds from `sp` to the emitter
+/// point `y` (normal `n_y`, on `object`) leaves `sp` along `dir` through `k`
 /// refractions: then manifold next-event estimation at `sp` counted the
 /// path BSDF sampling found along `dir`, and BSDF sampling adds nothing.
 #[allow(clippy::too_many_arguments)] // the vertex, the path found, the box test
@@ -427,22 +481,20 @@ pub(super) fn covers(
     y: Vec3,
     n_y: Vec3,
     object: ObjectId,
+    max_interfaces: usize,
     boxes: impl BoxTest,
 ) -> bool {
-    match connect(scene, sp, wi_ng, y, n_y, object, k, boxes) {
-        Ok(Some(found)) => {
-            found.shot.interfaces.iter().flatten().count() == k
-                && found.dir.dot(dir) > 1.0 - SAME_DIRECTION
-        }
-        _ => false,
-    }
+    matches!(
+        connect(scene, sp, wi_ng, y, n_y, object, max_interfaces, boxes),
+        Ok(Some(c)) if c.interfaces().count() == k && c.dir.dot(dir) > 1.0 - SAME_DIRECTION
+    )
 }
 
 /// Manifold next-event estimation at the shading point `at` toward the
 /// light point of `ls` (sampled by next-event estimation, whose straight
 /// shadow ray was blocked), through at most `max_interfaces` dielectric
-/// refractions. Returns the radiance added (`beta` included) and, when
-/// recording at vertex `record_at`, the chain's record.
+/// refractions. Returns the radiance added (`beta` included), and adds the
+/// chains' records to `records` when recording at vertex `record_at`.
 #[allow(clippy::too_many_arguments)] // the vertex, the light sample, what observes it
 pub(super) fn chain_event(
     scene: &Scene,
@@ -451,15 +503,16 @@ pub(super) fn chain_event(
     ls: &LightSample,
     max_interfaces: usize,
     record_at: Option<u32>,
+    records: &mut Vec<ChainRecord>,
     counters: &mut TraceCounters,
     sink: &mut impl RaySink,
     boxes: impl BoxTest,
-) -> Option<(Vec3, Option<ChainRecord>)> {
+) -> Vec3 {
     let LightPoint::Area { object: light, .. } = ls.source else {
-        return None;
+        return Vec3::ZERO;
     };
     if ls.delta || !ls.dist.is_finite() || ls.pdf <= 0.0 {
-        return None;
+        return Vec3::ZERO;
     }
     let sp = at.sp;
     let found = match connect(
@@ -472,76 +525,78 @@ pub(super) fn chain_event(
         max_interfaces,
         boxes,
     ) {
-        Ok(found) => found?,
+        Ok(found) => found,
         Err(()) => {
             counters.chain_misses += 1;
-            return None;
+            None
         }
     };
-    counters.rays += 1;
-    sink.closest(1, &found.shot.last);
-    let le = scene.objects()[found.hit.object as usize].emission?;
-    let f_x = at
-        .material
-        .eval(at.wi, at.material.to_local(&sp.frame, found.dir), sp.uv);
-    let transmittance: f32 = found
-        .shot
-        .interfaces
-        .iter()
-        .flatten()
-        .map(|i| i.factor)
-        .product();
+    let Some(le) = scene.objects()[light as usize].emission else {
+        return Vec3::ZERO;
+    };
     // The light sample's area density (selection included).
     let cos_y = ls.normal.dot(ls.wo).abs();
     let p_area = ls.pdf * cos_y / (ls.dist * ls.dist);
-    let contribution = beta * f_x * le * (transmittance / (p_area * found.det as f32));
-    if !contribution.is_finite() {
-        counters.chain_misses += 1;
-        return None;
-    }
-    counters.chains += 1;
-    let record = record_at.map(|vertex| {
-        let mut throughput = beta * f_x;
-        let specular = found
-            .shot
-            .interfaces
-            .iter()
-            .flatten()
-            .map(|i| {
-                let v = VertexRecord {
-                    at: i.at,
-                    p: i.sp.p,
-                    ng: i.sp.ng,
-                    ns: i.sp.ns(),
-                    kind: VertexKind::Specular,
-                    lobe: Some(Lobe::SpecularTransmission),
-                    eta: i.eta,
-                    m: i.sp.ns(),
-                    throughput,
-                    contribution: Vec3::ZERO,
-                };
-                throughput *= i.factor;
-                v
-            })
-            .collect();
-        ChainRecord {
-            connection: ConnectionRecord {
-                vertex,
-                light: LightPoint::Area {
-                    object: found.hit.object,
-                    triangle: found.hit.triangle,
-                    b1: found.hit.b1,
-                    b2: found.hit.b2,
-                },
-                light_position: found.light.p,
-                light_normal: found.light.ng,
-                contribution,
-                unoccluded: contribution,
-                occluder: None,
-                dropped: None,
-            },
-            specular,
+    let mut total = Vec3::ZERO;
+    for c in found.iter() {
+        counters.rays += 1;
+        sink.closest(1, &c.shot.last);
+        let f_x = at
+            .material
+            .eval(at.wi, at.material.to_local(&sp.frame, c.dir), sp.uv);
+        let transmittance: f32 = c.interfaces().map(|i| i.factor).product();
+        let contribution = beta * f_x * le * (transmittance / (p_area * c.det as f32));
+        if !contribution.is_finite() {
+            counters.chain_misses += 1;
+            continue;
         }
-    });
-    Some((contribution, record))
+        counters.chains += 1;
+        total += contribution;
+        if let Some(vertex) = record_at {
+            records.push(record(c, vertex, beta * f_x, contribution));
+        }
+    }
+    total
+}
+
+/// The record of chain `c` made at vertex `vertex`, arriving with
+/// `throughput` and adding `contribution`.
+fn record(c: &Found, vertex: u32, mut throughput: Vec3, contribution: Vec3) -> ChainRecord {
+    let specular = c
+        .interfaces()
+        .map(|i| {
+            let v = VertexRecord {
+                at: i.at,
+                p: i.sp.p,
+                ng: i.sp.ng,
+                ns: i.sp.ns(),
+                kind: VertexKind::Specular,
+                lobe: Some(Lobe::SpecularTransmission),
+                eta: i.eta,
+                m: i.sp.ns(),
+                throughput,
+                contribution: Vec3::ZERO,
+            };
+            throughput *= i.factor;
+            v
+        })
+        .collect();
+    ChainRecord {
+        connection: ConnectionRecord {
+            vertex,
+            light: LightPoint::Area {
+                object: c.hit.object,
+                triangle: c.hit.triangle,
+                b1: c.hit.b1,
+                b2: c.hit.b2,
+            },
+            light_position: c.light.p,
+            light_normal: c.light.ng,
+            contribution,
+            unoccluded: contribution,
+            occluder: None,
+            dropped: None,
+        },
+        specular,
+    }
 }

@@ -285,7 +285,9 @@ pub fn render(
     render_with(scene, opts, Kernel::Fastest, progress)
 }
 
-/// [`render`] with the bounce loop `kernel`.
+/// [`render`] with the bounce loop `kernel` (a scene that makes connections
+/// through glass, [`Scene::chains_to_lights`], renders with the scalar loop
+/// whatever `kernel`).
 ///
 /// # Panics
 /// If this CPU cannot run `kernel` ([`Kernel::available`]).

@@ -165,7 +165,7 @@ pub(super) fn trace_path(
         };
         contribution += nee.contribution;
         let connection = nee.connection;
-        let chain = nee.chain;
+        let chains_made = nee.chains;
         radiance += contribution;
 
         if let Some(r) = rec.as_deref_mut().filter(|r| !r.done) {
@@ -191,7 +191,7 @@ pub(super) fn trace_path(
                 contribution,
             });
             r.rec.connections.extend(connection);
-            r.rec.chains.extend(chain);
+            r.rec.chains.extend(chains_made);
             r.done = match r.level {
                 RecordLevel::Primary => true,
                 RecordLevel::FirstDiffuse => kind == VertexKind::Diffuse,
@@ -206,6 +206,7 @@ pub(super) fn trace_path(
             sp,
             wi_ng,
             dir: wo_world,
+            interfaces,
         });
         chain_state = chain_state.after(material, bs.lobe, origin);
         beta *= bs.weight;
@@ -247,8 +248,8 @@ struct NextEvent {
     contribution: Vec3,
     /// The connection, when recording at vertex index `record_at`.
     connection: Option<ConnectionRecord>,
-    /// The manifold connection through glass, when one was made and recorded.
-    chain: Option<ChainRecord>,
+    /// The manifold connections through glass made and recorded.
+    chains: Vec<ChainRecord>,
 }
 
 impl NextEvent {
@@ -256,7 +257,7 @@ impl NextEvent {
     const NONE: Self = Self {
         contribution: Vec3::ZERO,
         connection: None,
-        chain: None,
+        chains: Vec::new(),
     };
 }
 
@@ -359,12 +360,18 @@ fn add_chain(
     boxes: impl BoxTest,
     out: &mut NextEvent,
 ) {
-    if let Some((c, chain)) = chain_event(
-        scene, at, beta, ls, interfaces, record_at, counters, sink, boxes,
-    ) {
-        out.contribution += c;
-        out.chain = chain;
-    }
+    out.contribution += chain_event(
+        scene,
+        at,
+        beta,
+        ls,
+        interfaces,
+        record_at,
+        &mut out.chains,
+        counters,
+        sink,
+        boxes,
+    );
 }
 
 /// The origin of a ray leaving surface point `sp` in a direction whose
