@@ -179,3 +179,36 @@ fn traced_paths_through_an_exact_glass_ellipsoid_agree_with_newton() {
     );
     assert!(on_sphere >= 80, "{on_sphere} paths on the sphere");
 }
+
+/// The lens: the lamp reaches the floor only through a glass ball, by
+/// next-event connections through glass; the caustic paths built from
+/// them agree with Newton like those BSDF sampling finds.
+#[test]
+fn traced_connections_through_glass_agree_with_newton() {
+    let scene = load_scene(&shipped("lens-caustic.toml")).expect("shipped scene loads");
+    assert!(
+        scene.chains_to_lights(),
+        "the lens scene connects through glass"
+    );
+    let opts = RenderOptions::from_scene(&scene);
+    let samples: Vec<PixelSample> = (0..2000u32)
+        .map(|i| PixelSample {
+            pixel: UVec2::new(44 + i % 40, 50 + (i / 40) % 20),
+            sample: i % opts.spp,
+        })
+        .collect();
+    let records = trace_samples(&scene, &opts, &samples, RecordLevel::FirstDiffuse);
+    let chains: Vec<_> = records.iter().flat_map(|r| &r.chains).collect();
+    eprintln!("lens-caustic: {} connections through glass", chains.len());
+    assert!(
+        chains.len() >= 200,
+        "{} connections through glass",
+        chains.len()
+    );
+    for c in &chains {
+        assert_eq!(c.connection.vertex, 0, "made at the floor");
+        assert_eq!(c.specular.len(), 2, "into the ball and out");
+        assert!(c.connection.contribution.max_element() > 0.0);
+    }
+    check_loaded("lens-caustic", &scene, &[PathKind::Caustic]);
+}

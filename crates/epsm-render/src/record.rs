@@ -101,6 +101,19 @@ pub struct ConnectionRecord {
     pub dropped: Option<SampleDrop>,
 }
 
+/// A manifold next-event connection: from a path vertex through dielectric
+/// refractions to a point on an area light (`tracer` module `chain`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ChainRecord {
+    /// The vertex that connected, the light point the chain reaches (its
+    /// first-hit position and normal) and the radiance it added; never
+    /// blocked, never dropped.
+    pub connection: ConnectionRecord,
+    /// The refracting vertices from the path vertex to the light, each with
+    /// lobe [`Lobe::SpecularTransmission`] and its relative IOR.
+    pub specular: Vec<VertexRecord>,
+}
+
 /// The first surface that blocked a shadow ray.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct OccluderRecord {
@@ -133,6 +146,8 @@ pub struct PathRecord {
     pub vertices: Vec<VertexRecord>,
     /// Next-event connections.
     pub connections: Vec<ConnectionRecord>,
+    /// Manifold next-event connections through refracting surfaces.
+    pub chains: Vec<ChainRecord>,
     /// Radiance of rays that left the scene (background), MIS-weighted.
     pub escaped: Vec3,
     /// Unit world direction of the ray that left the scene and saw the
@@ -163,10 +178,15 @@ impl PathRecord {
     /// Whether the path touches object `id` at a recorded vertex, light point
     /// or occluder.
     pub fn touches(&self, id: ObjectId) -> bool {
+        let lit_by = |c: &ConnectionRecord| {
+            matches!(c.light, LightPoint::Area { object, .. } if object == id)
+                || c.occluder.is_some_and(|o| o.at.object == id)
+        };
         self.vertices.iter().any(|v| v.at.object == id)
-            || self.connections.iter().any(|c| {
-                matches!(c.light, LightPoint::Area { object, .. } if object == id)
-                    || c.occluder.is_some_and(|o| o.at.object == id)
-            })
+            || self.connections.iter().any(lit_by)
+            || self
+                .chains
+                .iter()
+                .any(|c| lit_by(&c.connection) || c.specular.iter().any(|v| v.at.object == id))
     }
 }

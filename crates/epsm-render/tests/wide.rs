@@ -73,7 +73,11 @@ fn shipped_scenes_render_the_same_images_wide_and_scalar() {
     names.sort();
     assert!(names.len() >= 8, "{names:?}");
     for name in &names {
-        let s = scene(name);
+        let mut s = scene(name);
+        // The wide loop has no connections through glass (scenes with them
+        // render with the scalar one): compare the loops without them.
+        s.settings_mut().manifold_nee = false;
+        assert!(!s.chains_to_lights());
         let opts = RenderOptions {
             spp: 5,
             ..RenderOptions::from_scene(&s)

@@ -93,6 +93,9 @@ pub struct RenderDesc {
     pub rr_depth: u32,
     /// Seed of the random streams.
     pub seed: u32,
+    /// Next-event connections through glass to area lights (manifold
+    /// next-event estimation), where the scene has both.
+    pub manifold_nee: bool,
 }
 
 impl Default for RenderDesc {
@@ -103,6 +106,7 @@ impl Default for RenderDesc {
             max_depth: s.max_depth,
             rr_depth: s.rr_depth,
             seed: s.seed,
+            manifold_nee: s.manifold_nee,
         }
     }
 }

@@ -50,7 +50,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         .with_context(|| format!("writing {}", args.output.display()))?;
     let c = out.counters;
     println!(
-        "{}: {}x{} at {} spp in {:.3} s, {:.2} M samples/s, {:.2} M rays/s{}{} -> {}",
+        "{}: {}x{} at {} spp in {:.3} s, {:.2} M samples/s, {:.2} M rays/s{}{}{} -> {}",
         args.scene.display(),
         cam.width,
         cam.height,
@@ -65,6 +65,14 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         },
         if c.leaks > 0 {
             format!(", {} paths ended by normal-leak guard", c.leaks)
+        } else {
+            String::new()
+        },
+        if c.chains + c.chain_misses > 0 {
+            format!(
+                ", {} connections through glass ({} seeds not solved)",
+                c.chains, c.chain_misses
+            )
         } else {
             String::new()
         },

@@ -200,8 +200,17 @@ impl Geometric<'_> {
                     .zip(lights)
                     .filter(move |(c, _)| c.vertex as usize == i)
             };
+            let chains = || {
+                record
+                    .chains
+                    .iter()
+                    .filter(move |c| c.connection.vertex as usize == i)
+                    .map(|c| c.connection.contribution)
+            };
             // Emission hit here.
-            let own = v[i].contribution - conns().map(|(c, _)| c.contribution).sum::<Vec3>();
+            let own = v[i].contribution
+                - conns().map(|(c, _)| c.contribution).sum::<Vec3>()
+                - chains().sum::<Vec3>();
             let mat = material(i).ok_or(DropReason::DegenerateTriangle)?;
             let delta = delta_lobe(&v[i]);
             let on_rays = self.primary == PrimaryMotion::OnCameraRay;
@@ -212,7 +221,9 @@ impl Geometric<'_> {
                 valid = false;
             }
             if !valid {
-                let left = own + conns().map(|(c, _)| c.contribution).sum::<Vec3>();
+                let left = own
+                    + conns().map(|(c, _)| c.contribution).sum::<Vec3>()
+                    + chains().sum::<Vec3>();
                 if left != Vec3::ZERO || j + 1 < nodes.len() || record.escaped != Vec3::ZERO {
                     skipped.add(DropReason::NotDifferentiable);
                 }
@@ -242,6 +253,13 @@ impl Geometric<'_> {
                     }
                 };
                 sum += c.contribution * (prefix + rate);
+            }
+            // Connections through glass: the factors up to here are
+            // differentiated, the chain's own (BSDF toward it, its
+            // geometry) are not, and are counted.
+            for c in chains() {
+                sum += c * prefix;
+                skipped.add(DropReason::NotDifferentiable);
             }
             // The segment to the next vertex: the lobe's weight at a delta
             // vertex (the next vertex lies on its ray), else the BSDF and

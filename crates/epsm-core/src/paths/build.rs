@@ -7,7 +7,7 @@
 use epsm_render::Scene;
 use epsm_render::lights::LightPoint;
 use epsm_render::materials::{Bsdf, Lobe, VertexKind};
-use epsm_render::record::{ConnectionRecord, PathRecord, TrianglePoint};
+use epsm_render::record::{ConnectionRecord, PathRecord, TrianglePoint, VertexRecord};
 use glam::Vec3;
 
 use super::{DiffPath, End, Node, PathKind};
@@ -71,25 +71,28 @@ fn exact_eta(scene: &Scene, at: &TrianglePoint, recorded: f32) -> f64 {
     }
 }
 
-/// Builds one path: `verts` are the record's unknown vertices (all but the
-/// first diffuse one are S; for a shadow, just D), `end` the fixed end.
+/// Builds one path: `verts` are its unknown vertices (all but the first
+/// diffuse one are S; for a shadow, just D), `end` the fixed end.
 pub(super) fn build(
     kind: PathKind,
     record: &PathRecord,
     scene: &Scene,
     motion: &Motion,
-    verts: &[usize],
-    end: Option<End>,
+    verts: &[&VertexRecord],
+    end: Option<End<'_>>,
     contribution: Vec3,
 ) -> Result<Option<DiffPath>, DropReason> {
-    let v = &record.vertices;
     // Nodes: camera, then the pixel vertex (fixed for primary paths), ...
     let mut nodes = vec![Node::Camera];
     if kind == PathKind::Primary {
-        nodes.push(surface(scene, motion, &v[0].at, None)?);
+        let first = record
+            .vertices
+            .first()
+            .ok_or(DropReason::NotDifferentiable)?;
+        nodes.push(surface(scene, motion, &first.at, None)?);
     }
-    for (q, &i) in verts.iter().enumerate() {
-        nodes.push(surface(scene, motion, &v[i].at, Some(q))?);
+    for (q, x) in verts.iter().enumerate() {
+        nodes.push(surface(scene, motion, &x.at, Some(q))?);
     }
     if kind == PathKind::Shadow
         && let Some(End::Light(c)) = &end
@@ -98,7 +101,7 @@ pub(super) fn build(
         nodes.push(surface(scene, motion, &o.at, None)?);
     }
     match &end {
-        Some(End::Vertex(i)) => nodes.push(surface(scene, motion, &v[*i].at, None)?),
+        Some(End::Vertex(x)) => nodes.push(surface(scene, motion, &x.at, None)?),
         Some(End::Light(c)) => nodes.push(light(scene, motion, c)?),
         None => {}
     }
@@ -127,7 +130,7 @@ pub(super) fn build(
         params,
     };
     let state = crate::constraints::assembly::evaluate(&path, motion, &[]);
-    for (q, &i) in verts.iter().enumerate() {
+    for (q, vert) in verts.iter().enumerate() {
         let x = q + 1;
         let (a, b) = if kind == PathKind::Shadow {
             (x + 1, x + 2)
@@ -140,7 +143,7 @@ pub(super) fn build(
         let wo = (s[b].x - s[x].x).normalize();
         let wi = (s[a].x - s[x].x).normalize();
         let first_caustic = kind == PathKind::Caustic && q == 0;
-        let ck = match (kind, v[i].kind, v[i].lobe) {
+        let ck = match (kind, vert.kind, vert.lobe) {
             (PathKind::Shadow, ..) => ConstraintKind::Collinear,
             _ if first_caustic => ConstraintKind::FixedDirection {
                 c: frame.project(&na(n), &na(wo)),
@@ -149,7 +152,7 @@ pub(super) fn build(
                 m: frame.project(&na(n), &na((wi + wo).normalize())),
             },
             (_, _, Some(Lobe::SpecularTransmission)) => ConstraintKind::Specular {
-                eta: exact_eta(scene, &v[i].at, v[i].eta),
+                eta: exact_eta(scene, &vert.at, vert.eta),
                 transmit: true,
             },
             (_, _, Some(Lobe::SpecularReflection)) => ConstraintKind::Specular {

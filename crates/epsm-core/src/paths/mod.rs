@@ -28,7 +28,7 @@ mod build;
 
 use epsm_render::Scene;
 use epsm_render::materials::VertexKind;
-use epsm_render::record::{ConnectionRecord, PathRecord};
+use epsm_render::record::{ConnectionRecord, PathRecord, VertexRecord};
 use glam::{DVec2, UVec2, Vec3};
 
 use crate::constraints::Constraint;
@@ -132,8 +132,8 @@ pub struct Classified {
 }
 
 /// How a path ends.
-enum End {
-    Vertex(usize),
+enum End<'a> {
+    Vertex(&'a VertexRecord),
     Light(ConnectionRecord),
 }
 
@@ -158,24 +158,27 @@ pub fn classify(
     if v.is_empty() {
         return out;
     }
-    let push =
-        |kind, verts: &[usize], end: Option<End>, contribution, out: &mut Classified| match build(
-            kind,
-            record,
-            scene,
-            motion,
-            verts,
-            end,
-            contribution,
-        ) {
-            Ok(Some(p)) if p.unknowns() == 0 => out.paths.push(p),
-            Ok(Some(p)) => match project(&p, motion, settings, &NewtonSettings::projection()) {
-                Ok(p) => out.paths.push(p),
-                Err(Dropped(r)) => out.skipped.add(r),
-            },
-            Ok(None) => {}
-            Err(r) => out.skipped.add(r),
-        };
+    let push = |kind,
+                verts: &[&VertexRecord],
+                end: Option<End<'_>>,
+                contribution,
+                out: &mut Classified| match build(
+        kind,
+        record,
+        scene,
+        motion,
+        verts,
+        end,
+        contribution,
+    ) {
+        Ok(Some(p)) if p.unknowns() == 0 => out.paths.push(p),
+        Ok(Some(p)) => match project(&p, motion, settings, &NewtonSettings::projection()) {
+            Ok(p) => out.paths.push(p),
+            Err(Dropped(r)) => out.skipped.add(r),
+        },
+        Ok(None) => {}
+        Err(r) => out.skipped.add(r),
+    };
     let emissive = |i: usize| {
         scene
             .objects()
@@ -188,7 +191,7 @@ pub fn classify(
     // Chains from the camera: S vertices v[0..k], then D (or L) at v[k].
     let k = first_diffuse.unwrap_or(v.len());
     if k > 0 {
-        let chain: Vec<usize> = (0..k).collect();
+        let chain: Vec<&VertexRecord> = v[..k].iter().collect();
         if let Some(d) = first_diffuse {
             let kind = if emissive(d) {
                 PathKind::ChainToLight
@@ -197,7 +200,7 @@ pub fn classify(
             };
             let c = record.radiance - v[..k].iter().map(|x| x.contribution).sum::<Vec3>();
             tracked += c;
-            push(kind, &chain, Some(End::Vertex(d)), c, &mut out);
+            push(kind, &chain, Some(End::Vertex(&v[d])), c, &mut out);
         } else if record.escaped != Vec3::ZERO {
             out.skipped.add(DropReason::NotDifferentiable);
         }
@@ -219,7 +222,7 @@ pub fn classify(
             .iter()
             .position(|x| x.kind == VertexKind::Diffuse)
             .map_or(v.len(), |i| i + 1);
-        let verts: Vec<usize> = (0..m).collect();
+        let verts: Vec<&VertexRecord> = v[..m].iter().collect();
         if m > 1 && m < v.len() && emissive(m) {
             // The light's emission: its vertex's contribution less the
             // next-event estimates made there.
@@ -234,7 +237,7 @@ pub fn classify(
             push(
                 PathKind::Caustic,
                 &verts,
-                Some(End::Vertex(m)),
+                Some(End::Vertex(&v[m])),
                 emitted,
                 &mut out,
             );
@@ -249,6 +252,20 @@ pub fn classify(
                 &mut out,
             );
         }
+        // Connections from D through glass to a light.
+        for chain in record.chains.iter().filter(|c| c.connection.vertex == 0) {
+            let verts: Vec<&VertexRecord> = std::iter::once(&v[0])
+                .chain(chain.specular.iter())
+                .collect();
+            tracked += chain.connection.contribution;
+            push(
+                PathKind::Caustic,
+                &verts,
+                Some(End::Light(chain.connection)),
+                chain.connection.contribution,
+                &mut out,
+            );
+        }
         // Shadows at D (one whose strength the tracer dropped is counted).
         for conn in record
             .connections
@@ -259,7 +276,7 @@ pub fn classify(
                 Some(d) => out.skipped.add(d.into()),
                 None => push(
                     PathKind::Shadow,
-                    &[0],
+                    &[&v[0]],
                     Some(End::Light(*conn)),
                     conn.unoccluded,
                     &mut out,

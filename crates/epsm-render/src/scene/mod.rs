@@ -66,6 +66,7 @@ pub struct Object {
 /// | `max_depth` | scatterings per path (the vertex the last one reaches still adds its emission) | 8 | ≥ 1 |
 /// | `rr_depth` | depth from which Russian roulette runs | 3 | ≥ 1 |
 /// | `seed` | — | 0 | any `u64`... stored as `u32` |
+/// | `manifold_nee` | next-event connections through glass to area lights (`tracer` module `chain`), where the scene has both | true | bool |
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct RenderSettings {
     /// Samples per pixel.
@@ -77,6 +78,10 @@ pub struct RenderSettings {
     pub rr_depth: u32,
     /// Seed of the random streams.
     pub seed: u32,
+    /// Whether non-delta vertices connect to area lights through dielectric
+    /// refractions (manifold next-event estimation), in scenes that have
+    /// both ([`Scene::chains_to_lights`]).
+    pub manifold_nee: bool,
 }
 
 impl Default for RenderSettings {
@@ -86,6 +91,7 @@ impl Default for RenderSettings {
             max_depth: 8,
             rr_depth: 3,
             seed: 0,
+            manifold_nee: true,
         }
     }
 }
@@ -115,6 +121,8 @@ pub struct Scene {
     parts: SceneParts,
     accel: Accel,
     lights: LightTable,
+    /// Whether some object is a dielectric and some object emits.
+    glass_and_area_lights: bool,
 }
 
 impl Scene {
@@ -138,11 +146,27 @@ impl Scene {
             &parts.background,
             accel.world_bounds(),
         );
+        let glass = parts.objects.iter().any(|o| {
+            parts
+                .materials
+                .get(o.material as usize)
+                .is_some_and(|m| matches!(m.bsdf, crate::materials::Bsdf::Dielectric(_)))
+        });
+        let glass_and_area_lights = glass && parts.objects.iter().any(|o| o.emission.is_some());
         Ok(Self {
             parts,
             accel,
             lights,
+            glass_and_area_lights,
         })
+    }
+
+    /// Whether the tracer makes manifold next-event connections through
+    /// glass: the setting is on and the scene has a dielectric object and an
+    /// emissive one. The wide tracer has no such connections, so these
+    /// scenes render with the scalar loop.
+    pub fn chains_to_lights(&self) -> bool {
+        self.parts.settings.manifold_nee && self.glass_and_area_lights
     }
 
     /// The camera.

@@ -24,6 +24,7 @@
 use glam::{UVec2, Vec3};
 use rayon::prelude::*;
 
+mod chain;
 mod path;
 mod tiles;
 #[cfg(target_arch = "x86_64")]
@@ -101,6 +102,13 @@ pub struct TraceCounters {
     /// Paths ended because the sampled direction lay on the wrong side of the
     /// geometric normal for its lobe (shading-normal light leak).
     pub leaks: u64,
+    /// Manifold next-event connections through glass that reached their light.
+    pub chains: u64,
+    /// Manifold next-event seeds (a straight shadow segment crossing glass)
+    /// whose chain was not found: Newton did not converge, or the chain
+    /// changed its interfaces, reflected totally, or was blocked before the
+    /// light. They add nothing.
+    pub chain_misses: u64,
 }
 
 impl TraceCounters {
@@ -109,6 +117,8 @@ impl TraceCounters {
         self.shadow_rays += o.shadow_rays;
         self.non_finite += o.non_finite;
         self.leaks += o.leaks;
+        self.chains += o.chains;
+        self.chain_misses += o.chain_misses;
     }
 }
 
@@ -275,7 +285,9 @@ pub fn render(
     render_with(scene, opts, Kernel::Fastest, progress)
 }
 
-/// [`render`] with the bounce loop `kernel`.
+/// [`render`] with the bounce loop `kernel` (a scene that makes connections
+/// through glass, [`Scene::chains_to_lights`], renders with the scalar loop
+/// whatever `kernel`).
 ///
 /// # Panics
 /// If this CPU cannot run `kernel` ([`Kernel::available`]).

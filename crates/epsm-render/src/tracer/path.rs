@@ -3,6 +3,7 @@
 
 use glam::Vec3;
 
+use super::chain::{ChainOrigin, ChainState, chain_event};
 use super::{
     DIM_DIRECTION, DIM_FIRST_BOUNCE, DIM_LIGHT, DIM_LIGHT_SELECT, DIM_LOBE, DIM_ROULETTE,
     DIMS_PER_BOUNCE, RaySink, RenderOptions, SHADOW_EPS, TraceCounters,
@@ -12,8 +13,8 @@ use crate::hit::SurfacePoint;
 use crate::materials::{Material, VertexKind};
 use crate::ray::{Ray, offset_origin};
 use crate::record::{
-    ConnectionRecord, OccluderRecord, PathRecord, RecordLevel, SampleDrop, TrianglePoint,
-    VertexRecord,
+    ChainRecord, ConnectionRecord, OccluderRecord, PathRecord, RecordLevel, SampleDrop,
+    TrianglePoint, VertexRecord,
 };
 use crate::sampler::{Block, PixelSampler};
 use crate::scene::Scene;
@@ -57,6 +58,10 @@ pub(super) fn trace_path(
     // The previous vertex: position and the pdf of the direction it sampled
     // (`None` when that was a delta lobe or the camera: no MIS).
     let mut prev: Option<(Vec3, f32)> = None;
+    // Whether an emitter hit now was estimated by manifold next-event
+    // estimation at an earlier vertex (and adds nothing here).
+    let chains = scene.chains_to_lights();
+    let mut chain_state = ChainState::Outside;
 
     // A path scatters at most `max_depth` times; the vertex its last
     // scattering reaches still adds what it emits (or the background seen),
@@ -92,9 +97,11 @@ pub(super) fn trace_path(
         let wi_ng = wi_world.dot(sp.ng);
         let mut contribution = Vec3::ZERO;
 
-        // Emission hit by BSDF sampling (front face only).
+        // Emission hit by BSDF sampling (front face only), unless manifold
+        // next-event estimation counted this path.
         if let Some(le) = object.emission
             && wi_ng > 0.0
+            && !chain_state.counted(scene, &sp, hit.object, boxes)
         {
             let w = prev.map_or(1.0, |(p_prev, pdf)| {
                 mis(
@@ -142,15 +149,23 @@ pub(super) fn trace_path(
             wi_ng,
             material,
         };
+        // Manifold next-event estimation reaches a light through at most
+        // this many refractions within the depth limit.
+        let interfaces = if chains && scatters && !material.is_delta() {
+            (opts.max_depth - depth - 1) as usize
+        } else {
+            0
+        };
         let nee = if scatters {
             next_event(
-                scene, &shading, beta, &numbers, record_at, counters, sink, boxes,
+                scene, &shading, beta, &numbers, interfaces, record_at, counters, sink, boxes,
             )
         } else {
             NextEvent::NONE
         };
         contribution += nee.contribution;
         let connection = nee.connection;
+        let chains_made = nee.chains;
         radiance += contribution;
 
         if let Some(r) = rec.as_deref_mut().filter(|r| !r.done) {
@@ -176,6 +191,7 @@ pub(super) fn trace_path(
                 contribution,
             });
             r.rec.connections.extend(connection);
+            r.rec.chains.extend(chains_made);
             r.done = match r.level {
                 RecordLevel::Primary => true,
                 RecordLevel::FirstDiffuse => kind == VertexKind::Diffuse,
@@ -186,6 +202,13 @@ pub(super) fn trace_path(
         let Some((bs, wo_world, wo_ng)) = next else {
             break;
         };
+        let origin = (interfaces > 0).then_some(ChainOrigin {
+            sp,
+            wi_ng,
+            dir: wo_world,
+            interfaces,
+        });
+        chain_state = chain_state.after(material, bs.lobe, origin);
         beta *= bs.weight;
         if bs.lobe.is_transmission() {
             eta_scale *= bs.eta * bs.eta;
@@ -209,14 +232,14 @@ pub(super) fn trace_path(
 }
 
 /// A shading point as next-event estimation sees it.
-struct Shading<'a> {
-    sp: &'a SurfacePoint,
+pub(super) struct Shading<'a> {
+    pub(super) sp: &'a SurfacePoint,
     /// Direction toward the previous vertex, local frame (as far as the
     /// material reads it: [`Material::to_local`]).
-    wi: Vec3,
+    pub(super) wi: Vec3,
     /// `wi · ng` in world space: its cosine with the geometric normal.
-    wi_ng: f32,
-    material: &'a Material,
+    pub(super) wi_ng: f32,
+    pub(super) material: &'a Material,
 }
 
 /// What next-event estimation at one vertex added.
@@ -225,6 +248,8 @@ struct NextEvent {
     contribution: Vec3,
     /// The connection, when recording at vertex index `record_at`.
     connection: Option<ConnectionRecord>,
+    /// The manifold connections through glass made and recorded.
+    chains: Vec<ChainRecord>,
 }
 
 impl NextEvent {
@@ -232,13 +257,16 @@ impl NextEvent {
     const NONE: Self = Self {
         contribution: Vec3::ZERO,
         connection: None,
+        chains: Vec::new(),
     };
 }
 
 /// Samples a light, evaluates the BSDF toward it, MIS-weights against BSDF
 /// sampling and traces the shadow ray (box tests by `boxes`, reported to
 /// `sink`). Draws three random numbers of the bounce's block `numbers`, none
-/// at a delta vertex.
+/// at a delta vertex. When the shadow ray is blocked and `interfaces > 0`,
+/// tries the connection through at most that many refractions (module
+/// `chain`) with the same light point.
 ///
 /// The walk is not passed in as a closure: a closure is compiled as a
 /// function of its own, without the AVX2 tile loop's target features, and
@@ -251,6 +279,7 @@ fn next_event(
     at: &Shading<'_>,
     beta: Vec3,
     numbers: &Block,
+    interfaces: usize,
     record_at: Option<u32>,
     counters: &mut TraceCounters,
     sink: &mut impl RaySink,
@@ -270,6 +299,12 @@ fn next_event(
     let wo_ng = ls.wo.dot(at.sp.ng);
     let same_side = wo_ng * at.wi_ng > 0.0;
     if f == Vec3::ZERO || !same_side || ls.pdf <= 0.0 {
+        // The chain through glass leaves in its own direction.
+        if interfaces > 0 && !ls.delta {
+            add_chain(
+                scene, at, beta, &ls, interfaces, record_at, counters, sink, boxes, &mut out,
+            );
+        }
         return out;
     }
     let w = if ls.delta {
@@ -284,6 +319,10 @@ fn next_event(
     let blocked = scene.accel().occluded_with(&shadow, boxes);
     if !blocked {
         out.contribution = unoccluded;
+    } else if interfaces > 0 && !ls.delta {
+        add_chain(
+            scene, at, beta, &ls, interfaces, record_at, counters, sink, boxes, &mut out,
+        );
     }
     out.connection = record_at.map(|vertex| {
         // Unblocked, a non-finite strength is the contribution and drops
@@ -307,10 +346,38 @@ fn next_event(
     out
 }
 
+/// Adds the manifold connection toward `ls`'s light point to `out`.
+#[allow(clippy::too_many_arguments)] // the vertex, the light sample, what observes it
+fn add_chain(
+    scene: &Scene,
+    at: &Shading<'_>,
+    beta: Vec3,
+    ls: &crate::lights::LightSample,
+    interfaces: usize,
+    record_at: Option<u32>,
+    counters: &mut TraceCounters,
+    sink: &mut impl RaySink,
+    boxes: impl BoxTest,
+    out: &mut NextEvent,
+) {
+    out.contribution += chain_event(
+        scene,
+        at,
+        beta,
+        ls,
+        interfaces,
+        record_at,
+        &mut out.chains,
+        counters,
+        sink,
+        boxes,
+    );
+}
+
 /// The origin of a ray leaving surface point `sp` in a direction whose
 /// cosine with the geometric normal is `wo_ng`: offset to that side.
 #[inline(always)]
-fn leaving_origin(sp: &SurfacePoint, wo_ng: f32) -> Vec3 {
+pub(super) fn leaving_origin(sp: &SurfacePoint, wo_ng: f32) -> Vec3 {
     let side = if wo_ng >= 0.0 { sp.ng } else { -sp.ng };
     offset_origin(sp.p, side)
 }

@@ -26,7 +26,8 @@ use crate::scene::Scene;
 
 /// Renders the tiles in parallel: the image, with the records at `level`,
 /// and with `log` the rays cast; by the wide tracer where `kernel` names
-/// one (images only: no records, no ray log).
+/// one (images only: no records, no ray log) and the scene makes no
+/// manifold next-event connections ([`Scene::chains_to_lights`]).
 pub(super) fn render_tiles(
     scene: &Scene,
     opts: &RenderOptions,
@@ -39,7 +40,7 @@ pub(super) fn render_tiles(
     let (w, h) = (scene.camera().width, scene.camera().height);
     let (tx, ty) = (w.div_ceil(TILE), h.div_ceil(TILE));
     #[cfg(target_arch = "x86_64")]
-    let wide = (level.is_none() && !log && opts.spp > 0)
+    let wide = (level.is_none() && !log && opts.spp > 0 && !scene.chains_to_lights())
         .then(|| kernel.backend())
         .flatten()
         .map(|backend| wide::WideTracer::new(scene, backend));

@@ -126,6 +126,7 @@ fn render(r: &RenderDesc, ctx: &Fields) -> Result<RenderSettings> {
         max_depth: ctx.count("render.max_depth", r.max_depth, 1, MAX_DEPTH)?,
         rr_depth: ctx.count("render.rr_depth", r.rr_depth, 1, u32::MAX)?,
         seed: r.seed,
+        manifold_nee: r.manifold_nee,
     })
 }
 

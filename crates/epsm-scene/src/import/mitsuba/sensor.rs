@@ -92,6 +92,7 @@ pub(crate) fn sensor(
         max_depth: MAX_DEPTH,
         rr_depth: 5,
         seed: 0,
+        manifold_nee: true,
     };
     for sampler in sensor.tagged("sampler") {
         let count = |key: &str, lo: i64| -> Result<Option<u32>> {
