@@ -14,6 +14,7 @@
 
 use glam::{UVec2, Vec2, Vec3};
 
+use crate::hit::Hit;
 use crate::lights::LightPoint;
 use crate::materials::{Lobe, VertexKind};
 use crate::scene::ObjectId;
@@ -44,6 +45,18 @@ pub struct TrianglePoint {
     pub b1: f32,
     /// Barycentric `b2` (second octahedral coordinate on an exact sphere).
     pub b2: f32,
+}
+
+impl From<&Hit> for TrianglePoint {
+    /// Where `hit` lies.
+    fn from(hit: &Hit) -> Self {
+        Self {
+            object: hit.object,
+            triangle: hit.triangle,
+            b1: hit.b1,
+            b2: hit.b2,
+        }
+    }
 }
 
 /// One surface vertex of a path (`x1`, `x2`, …; the camera is `x0`).

@@ -34,7 +34,7 @@ use epsm_render::Scene;
 use epsm_render::frame::Frame;
 use epsm_render::lights::LightPoint;
 use epsm_render::materials::VertexKind;
-use epsm_render::record::{ConnectionRecord, PathRecord};
+use epsm_render::record::PathRecord;
 use glam::Vec3;
 
 use geometry::Geometric;
@@ -167,21 +167,23 @@ impl ColourModel {
             after[i] = after[i + 1] + v[i + 1].contribution;
         }
         let material_of = |object: u32| scene.objects().get(object as usize).map(|o| o.material);
-        // A connection through glass leaves its vertex toward its first
-        // refraction; its IOR terms are not modelled and are counted.
-        let chain_ends = record.chains.iter().map(|c| {
-            let first = c
-                .specular
-                .first()
-                .map_or(c.connection.light_position, |s| s.p);
-            (c.connection, Some(first))
-        });
-        let ends: Vec<(ConnectionRecord, Option<Vec3>)> = record
-            .connections
-            .iter()
-            .map(|c| (*c, None))
-            .chain(chain_ends)
-            .collect();
+        // Every connection, with where it leaves its vertex toward: a
+        // connection through glass toward its first refraction (its IOR
+        // terms are not modelled and are counted).
+        let ends = || {
+            let through_glass = record.chains.iter().map(|c| {
+                let first = c
+                    .specular
+                    .first()
+                    .map_or(c.connection.light_position, |s| s.p);
+                (c.connection, Some(first))
+            });
+            record
+                .connections
+                .iter()
+                .map(|c| (*c, None))
+                .chain(through_glass)
+        };
         for c in &record.chains {
             for s in &c.specular {
                 if material_of(s.at.object)
@@ -193,7 +195,7 @@ impl ColourModel {
             }
         }
         for (i, x) in v.iter().enumerate() {
-            let conns = ends.iter().filter(|(c, _)| c.vertex as usize == i);
+            let conns = ends().filter(|(c, _)| c.vertex as usize == i);
             // Emission of this vertex (its contribution less its connections).
             if let Some(Some((param, s))) = self.emission.get(x.at.object as usize)
                 && *s > 0.0
@@ -233,7 +235,7 @@ impl ColourModel {
                 let mut d = probe.ratio(wi, wo_next) * after[i];
                 for (c, toward) in conns.clone() {
                     let dir = match (c.light, toward) {
-                        (_, Some(p)) => (*p - x.p).normalize_or_zero(),
+                        (_, Some(p)) => (p - x.p).normalize_or_zero(),
                         (LightPoint::Background, None) => c.light_position,
                         _ => (c.light_position - x.p).normalize_or_zero(),
                     };
@@ -242,7 +244,7 @@ impl ColourModel {
                 out.push((probe.param, d));
             }
         }
-        for (c, _) in &ends {
+        for (c, _) in ends() {
             if let LightPoint::Area { object, .. } = c.light
                 && let Some(Some((param, s))) = self.emission.get(object as usize)
                 && *s > 0.0

@@ -263,12 +263,7 @@ fn shoot(
         }
         *slot = Some(Interface {
             sp: hp,
-            at: TrianglePoint {
-                object: hit.object,
-                triangle: hit.triangle,
-                b1: hit.b1,
-                b2: hit.b2,
-            },
+            at: TrianglePoint::from(&hit),
             factor: bs.pdf * bs.weight.x,
             eta: bs.eta,
         });
@@ -328,8 +323,9 @@ fn jacobian(
 
 /// Solves for the chain from `sp`, starting along the unit `seed` toward the
 /// light point at distance `dist`, through `k` dielectric interfaces.
-/// Returns the unit direction at `at` and the Jacobian's determinant
-/// (area at `y` per solid angle at `x`), or `None` (a miss).
+/// Returns the unit direction at `sp`, the Jacobian's determinant (area at
+/// `y` per solid angle at `x`) and the shot along that direction, or `None`
+/// (a miss).
 #[allow(clippy::too_many_arguments)] // the vertex, the seed, the plane, the box test
 fn solve(
     scene: &Scene,
@@ -339,16 +335,17 @@ fn solve(
     k: usize,
     plane: &Plane,
     boxes: impl BoxTest,
-) -> Option<(Vec3, f64)> {
+) -> Option<(Vec3, f64, Shot)> {
     let tol = f64::from(TOLERANCE * dist);
     let mut dir = seed;
-    let mut r = residual(scene, sp, dir, k, plane, boxes)?;
+    let mut shot = shoot(scene, sp, dir, k, plane, boxes)?;
+    let mut r = plane.coords(shot.end);
     for _ in 0..MAX_ITERATIONS {
         let converged = r.length() < tol;
         let (ja, jb, s, t) = jacobian(scene, sp, dir, k, plane, r, converged, boxes)?;
         let det = ja.x * jb.y - jb.x * ja.y;
         if converged {
-            return (det.is_finite() && det != 0.0).then_some((dir, det.abs()));
+            return (det.is_finite() && det != 0.0).then_some((dir, det.abs(), shot));
         }
         if !det.is_finite() || det == 0.0 {
             return None;
@@ -362,15 +359,16 @@ fn solve(
         let mut stepped = None;
         for _ in 0..HALVINGS {
             let d = (dir + s * (da * scale) as f32 + t * (db * scale) as f32).normalize();
-            if let Some(rn) = residual(scene, sp, d, k, plane, boxes)
-                && rn.length() < PROGRESS * r.length()
-            {
-                stepped = Some((d, rn));
-                break;
+            if let Some(sn) = shoot(scene, sp, d, k, plane, boxes) {
+                let rn = plane.coords(sn.end);
+                if rn.length() < PROGRESS * r.length() {
+                    stepped = Some((d, sn, rn));
+                    break;
+                }
             }
             scale *= 0.5;
         }
-        (dir, r) = stepped?;
+        (dir, shot, r) = stepped?;
     }
     None
 }
@@ -448,11 +446,10 @@ fn solve_chain(
     object: ObjectId,
     boxes: impl BoxTest,
 ) -> Option<Found> {
-    let (dir, det) = solve(scene, sp, seed, dist, k, plane, boxes)?;
+    let (dir, det, shot) = solve(scene, sp, seed, dist, k, plane, boxes)?;
     if dir.dot(sp.ng) * wi_ng <= 0.0 {
         return None;
     }
-    let shot = shoot(scene, sp, dir, k, plane, boxes)?;
     let hit = scene.accel().closest_hit_with(&shot.last, boxes)?;
     let light = scene.accel().surface_point(scene.objects(), &hit);
     if hit.object != object || shot.last.dir.dot(light.ng) >= 0.0 {
@@ -493,8 +490,8 @@ pub(super) fn covers(
 /// Manifold next-event estimation at the shading point `at` toward the
 /// light point of `ls` (sampled by next-event estimation, whose straight
 /// shadow ray was blocked), through at most `max_interfaces` dielectric
-/// refractions. Returns the radiance added (`beta` included), and adds the
-/// chains' records to `records` when recording at vertex `record_at`.
+/// refractions. Returns the radiance added (`beta` included) and, when
+/// recording at vertex `record_at`, the chain's record.
 #[allow(clippy::too_many_arguments)] // the vertex, the light sample, what observes it
 pub(super) fn chain_event(
     scene: &Scene,
@@ -503,19 +500,18 @@ pub(super) fn chain_event(
     ls: &LightSample,
     max_interfaces: usize,
     record_at: Option<u32>,
-    records: &mut Vec<ChainRecord>,
     counters: &mut TraceCounters,
     sink: &mut impl RaySink,
     boxes: impl BoxTest,
-) -> Vec3 {
+) -> Option<(Vec3, Option<ChainRecord>)> {
     let LightPoint::Area { object: light, .. } = ls.source else {
-        return Vec3::ZERO;
+        return None;
     };
     if ls.delta || !ls.dist.is_finite() || ls.pdf <= 0.0 {
-        return Vec3::ZERO;
+        return None;
     }
     let sp = at.sp;
-    let found = match connect(
+    let c = match connect(
         scene,
         sp,
         at.wi_ng,
@@ -525,38 +521,30 @@ pub(super) fn chain_event(
         max_interfaces,
         boxes,
     ) {
-        Ok(found) => found,
+        Ok(found) => found?,
         Err(()) => {
             counters.chain_misses += 1;
-            None
+            return None;
         }
     };
-    let Some(le) = scene.objects()[light as usize].emission else {
-        return Vec3::ZERO;
-    };
+    let le = scene.objects()[light as usize].emission?;
     // The light sample's area density (selection included).
     let cos_y = ls.normal.dot(ls.wo).abs();
     let p_area = ls.pdf * cos_y / (ls.dist * ls.dist);
-    let mut total = Vec3::ZERO;
-    for c in found.iter() {
-        counters.rays += 1;
-        sink.closest(1, &c.shot.last);
-        let f_x = at
-            .material
-            .eval(at.wi, at.material.to_local(&sp.frame, c.dir), sp.uv);
-        let transmittance: f32 = c.interfaces().map(|i| i.factor).product();
-        let contribution = beta * f_x * le * (transmittance / (p_area * c.det as f32));
-        if !contribution.is_finite() {
-            counters.chain_misses += 1;
-            continue;
-        }
-        counters.chains += 1;
-        total += contribution;
-        if let Some(vertex) = record_at {
-            records.push(record(c, vertex, beta * f_x, contribution));
-        }
+    counters.rays += 1;
+    sink.closest(1, &c.shot.last);
+    let f_x = at
+        .material
+        .eval(at.wi, at.material.to_local(&sp.frame, c.dir), sp.uv);
+    let transmittance: f32 = c.interfaces().map(|i| i.factor).product();
+    let contribution = beta * f_x * le * (transmittance / (p_area * c.det as f32));
+    if !contribution.is_finite() {
+        counters.chain_misses += 1;
+        return None;
     }
-    total
+    counters.chains += 1;
+    let record = record_at.map(|vertex| record(&c, vertex, beta * f_x, contribution));
+    Some((contribution, record))
 }
 
 /// The record of chain `c` made at vertex `vertex`, arriving with

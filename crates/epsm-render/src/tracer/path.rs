@@ -165,16 +165,11 @@ pub(super) fn trace_path(
         };
         contribution += nee.contribution;
         let connection = nee.connection;
-        let chains_made = nee.chains;
+        let chain = nee.chain;
         radiance += contribution;
 
         if let Some(r) = rec.as_deref_mut().filter(|r| !r.done) {
-            let at = TrianglePoint {
-                object: hit.object,
-                triangle: hit.triangle,
-                b1: hit.b1,
-                b2: hit.b2,
-            };
+            let at = TrianglePoint::from(&hit);
             let (lobe, eta, m) = next.map_or((None, 1.0, sp.ns()), |(bs, _, _)| {
                 (Some(bs.lobe), bs.eta, frame.to_world(bs.m))
             });
@@ -191,7 +186,7 @@ pub(super) fn trace_path(
                 contribution,
             });
             r.rec.connections.extend(connection);
-            r.rec.chains.extend(chains_made);
+            r.rec.chains.extend(chain);
             r.done = match r.level {
                 RecordLevel::Primary => true,
                 RecordLevel::FirstDiffuse => kind == VertexKind::Diffuse,
@@ -248,8 +243,8 @@ struct NextEvent {
     contribution: Vec3,
     /// The connection, when recording at vertex index `record_at`.
     connection: Option<ConnectionRecord>,
-    /// The manifold connections through glass made and recorded.
-    chains: Vec<ChainRecord>,
+    /// The manifold connection through glass, when one was made and recorded.
+    chain: Option<ChainRecord>,
 }
 
 impl NextEvent {
@@ -257,7 +252,7 @@ impl NextEvent {
     const NONE: Self = Self {
         contribution: Vec3::ZERO,
         connection: None,
-        chains: Vec::new(),
+        chain: None,
     };
 }
 
@@ -300,11 +295,9 @@ fn next_event(
     let same_side = wo_ng * at.wi_ng > 0.0;
     if f == Vec3::ZERO || !same_side || ls.pdf <= 0.0 {
         // The chain through glass leaves in its own direction.
-        if interfaces > 0 && !ls.delta {
-            add_chain(
-                scene, at, beta, &ls, interfaces, record_at, counters, sink, boxes, &mut out,
-            );
-        }
+        add_chain(
+            scene, at, beta, &ls, interfaces, record_at, counters, sink, boxes, &mut out,
+        );
         return out;
     }
     let w = if ls.delta {
@@ -319,7 +312,7 @@ fn next_event(
     let blocked = scene.accel().occluded_with(&shadow, boxes);
     if !blocked {
         out.contribution = unoccluded;
-    } else if interfaces > 0 && !ls.delta {
+    } else {
         add_chain(
             scene, at, beta, &ls, interfaces, record_at, counters, sink, boxes, &mut out,
         );
@@ -346,7 +339,8 @@ fn next_event(
     out
 }
 
-/// Adds the manifold connection toward `ls`'s light point to `out`.
+/// Adds the manifold connection toward `ls`'s light point to `out`, through
+/// at most `interfaces` refractions (none when 0).
 #[allow(clippy::too_many_arguments)] // the vertex, the light sample, what observes it
 fn add_chain(
     scene: &Scene,
@@ -360,18 +354,15 @@ fn add_chain(
     boxes: impl BoxTest,
     out: &mut NextEvent,
 ) {
-    out.contribution += chain_event(
-        scene,
-        at,
-        beta,
-        ls,
-        interfaces,
-        record_at,
-        &mut out.chains,
-        counters,
-        sink,
-        boxes,
-    );
+    if interfaces == 0 {
+        return;
+    }
+    if let Some((c, chain)) = chain_event(
+        scene, at, beta, ls, interfaces, record_at, counters, sink, boxes,
+    ) {
+        out.contribution += c;
+        out.chain = chain;
+    }
 }
 
 /// The origin of a ray leaving surface point `sp` in a direction whose
@@ -402,12 +393,7 @@ fn first_occluder(scene: &Scene, shadow: &Ray) -> Option<OccluderRecord> {
     let hit = scene.accel().closest_hit(shadow)?;
     let sp = scene.accel().surface_point(scene.objects(), &hit);
     Some(OccluderRecord {
-        at: TrianglePoint {
-            object: hit.object,
-            triangle: hit.triangle,
-            b1: hit.b1,
-            b2: hit.b2,
-        },
+        at: TrianglePoint::from(&hit),
         p: sp.p,
     })
 }
