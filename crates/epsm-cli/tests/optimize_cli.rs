@@ -392,6 +392,94 @@ fn bench_rays_on_a_scene_walks_the_rays_of_its_render() {
     );
 }
 
+/// Whether the ray `o + t d` (`t ≥ 0`) crosses the triangle `v` (Möller–Trumbore, `f64`).
+fn crosses(o: [f64; 3], d: [f64; 3], v: [[f64; 3]; 3]) -> bool {
+    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let cross = |a: [f64; 3], b: [f64; 3]| {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    };
+    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    let (e1, e2) = (sub(v[1], v[0]), sub(v[2], v[0]));
+    let p = cross(d, e2);
+    let det = dot(e1, p);
+    if det.abs() < 1e-12 {
+        return false;
+    }
+    let s = sub(o, v[0]);
+    let u = dot(s, p) / det;
+    let q = cross(s, e1);
+    let w = dot(d, q) / det;
+    u >= 0.0 && w >= 0.0 && u + w <= 1.0 && dot(e2, q) / det >= 0.0
+}
+
+#[test]
+fn bench_rays_dumps_the_triangles_and_rays_it_walks() {
+    let dir = std::env::temp_dir().join(format!("epsm-rays-dump-{}", std::process::id()));
+    let run = epsm(&[
+        "bench",
+        "rays",
+        "--triangles",
+        "80",
+        "--rays",
+        "500",
+        "--threads",
+        "1",
+        "--repeat",
+        "1",
+        "--json",
+        "--dump",
+        dir.to_str().expect("utf-8"),
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let report: serde_json::Value = serde_json::from_slice(&run.stdout).expect("one JSON object");
+    let floats = |name: &str| -> Vec<f64> {
+        let bytes = std::fs::read(dir.join(name)).expect(name);
+        assert_eq!(bytes.len() % 4, 0, "{name}");
+        bytes
+            .chunks_exact(4)
+            .map(|b| f64::from(f32::from_le_bytes([b[0], b[1], b[2], b[3]])))
+            .collect()
+    };
+    let triangles = floats("triangles.f32");
+    // Five instances of an 80-triangle sphere, nine floats each.
+    assert_eq!(triangles.len(), 5 * 80 * 9);
+    let triangles: Vec<[[f64; 3]; 3]> = triangles
+        .chunks_exact(9)
+        .map(|t| [[t[0], t[1], t[2]], [t[3], t[4], t[5]], [t[6], t[7], t[8]]])
+        .collect();
+    for name in ["coherent", "incoherent"] {
+        let rays = floats(&format!("{name}.f32"));
+        assert_eq!(rays.len(), 500 * 6, "{name}");
+        // The dumped rays against the dumped triangles, by brute force, hit
+        // as often as the benchmark's walks of its own.
+        let hits = rays
+            .chunks_exact(6)
+            .filter(|r| {
+                let (o, d) = ([r[0], r[1], r[2]], [r[3], r[4], r[5]]);
+                triangles.iter().any(|&t| crosses(o, d, t))
+            })
+            .count();
+        let walked = report["throughput"]
+            .as_array()
+            .expect("rows")
+            .iter()
+            .find(|t| t["rays"] == name && t["query"] == "closest")
+            .and_then(|t| t["hit_fraction"].as_f64())
+            .expect("hit fraction");
+        assert!(hits > 0, "{name}: no ray hits");
+        assert_eq!(hits as f64 / 500.0, walked, "{name}");
+    }
+    std::fs::remove_dir_all(&dir).expect("remove the dump");
+}
+
 #[test]
 fn bench_ot_reports_the_exact_solvers_cold_starts() {
     // The default blobs pair (n = 4096, seed 0) is well inside the warm start's range.

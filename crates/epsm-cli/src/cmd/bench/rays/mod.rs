@@ -34,10 +34,19 @@
 //! | `--threads` | rayon threads (one run) | 1 and 2 | ≥ 1 |
 //! | `--repeat` | runs per measurement, fastest reported | 3 | ≥ 1 |
 //! | `--json` | print one JSON object | off | — |
+//! | `--dump` | a folder: write the sphere's triangles and ray sets there (below) | — | — |
+//!
+//! With `--dump DIR` (the sphere only), the benchmark also writes what it
+//! walks, for another ray tracer to walk the same rays
+//! (`scripts/embree-compare.py`): `triangles.f32`, every object's triangles
+//! in world space (`f32` little-endian, nine per triangle: three vertices of
+//! `x, y, z`), and `coherent.f32` and `incoherent.f32`, six `f32` per ray
+//! (origin, then direction; `t` in `[0, ∞)`).
 //!
 //! `cargo run --release -p epsm-cli -- bench rays --json`
 //! `cargo run --release -p epsm-cli -- bench rays --scene scenes/caustic-box.toml`
 
+mod dump;
 mod measure;
 mod report;
 mod scene;
@@ -90,6 +99,10 @@ pub struct RaysBenchArgs {
     /// Print one JSON object instead of text.
     #[arg(long)]
     pub json: bool,
+    /// Write the sphere's world-space triangles and the ray sets to this
+    /// folder (`triangles.f32`, `coherent.f32`, `incoherent.f32`).
+    #[arg(long, conflicts_with = "scene")]
+    pub dump: Option<PathBuf>,
 }
 
 /// One set of rays to walk, and how.
@@ -185,10 +198,10 @@ fn sphere(args: &RaysBenchArgs) -> anyhow::Result<()> {
         args.rays
     );
     let mesh = Arc::new(scene::bumpy_sphere(args.triangles));
-    let objects = scene::scene(&mesh);
+    let mut objects = scene::scene(&mesh);
     let mut accel = Accel::build(&objects);
     let build_seconds = accel.stats().build_seconds;
-    let tlas_update_seconds = tlas_update(&mut accel, objects);
+    let tlas_update_seconds = tlas_update(&mut accel, &mut objects);
 
     let (lo, hi) = accel.world_bounds().context("empty scene")?;
     let camera = Camera::look_at(
@@ -209,6 +222,9 @@ fn sphere(args: &RaysBenchArgs) -> anyhow::Result<()> {
         })
         .collect();
     let incoherent = scene::random_rays(args.rays, lo, hi);
+    if let Some(dir) = &args.dump {
+        dump::write(dir, &objects, &coherent, &incoherent)?;
+    }
     let sets = [("coherent", coherent), ("incoherent", incoherent)].map(|(name, rays)| RaySet {
         name,
         rays,
@@ -296,14 +312,14 @@ fn throughputs(
 }
 
 /// Mean time of moving one instance and updating the top level, seconds.
-fn tlas_update(accel: &mut Accel, mut objects: Vec<Object>) -> f64 {
+fn tlas_update(accel: &mut Accel, objects: &mut [Object]) -> f64 {
     const MOVES: usize = 200;
     let start = Instant::now();
     for k in 0..MOVES {
         let angle = k as f64 * 0.01;
         objects[1].world_from_object =
             scene::placement(DVec3::new(2.5 * angle.cos(), 0.0, 2.5 * angle.sin()), 0.4);
-        accel.update_instance(&objects, 1);
+        accel.update_instance(objects, 1);
     }
     start.elapsed().as_secs_f64() / MOVES as f64
 }
