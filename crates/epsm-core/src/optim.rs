@@ -5,7 +5,15 @@
 //! Step `t` (1-based since the last reset), per parameter `k`:
 //! `m ← β₁m + (1−β₁)g`, `v ← β₂v + (1−β₂)g²`,
 //! `θ ← clamp(θ − lr_k · decay^i · m̂ / (√v̂ + ε), lo_k, hi_k)` with
-//! `m̂ = m/(1−β₁ᵗ)`, `v̂ = v/(1−β₂ᵗ)` and `i` the iteration (never reset).
+//! `m̂ = m/(1−β₁ᵗ)`, `v̂ = v/(1−β₂ᵗ)` and `i` the decay step: the iteration,
+//! halved at each reset.
+//!
+//! A reset starts a new phase (the hybrid schedule's switch from OT to L2):
+//! the moments are forgotten, and the step size goes back to where it stood
+//! at half the iterations run so far, from where it decays again. A phase
+//! that starts late would otherwise take steps of a tenth of the first ones
+//! or less: the L2 phase then stops where the OT phase left θ, instead of
+//! correcting what the OT loss could not resolve.
 //!
 //! | key (`[optimizer]`) | default | range |
 //! |---|---|---|
@@ -44,7 +52,7 @@ pub struct Adam {
     pub v: Vec<f64>,
     /// Steps since the last reset.
     pub t: u32,
-    /// Steps since the start (drives the decay).
+    /// Decay step `i`: steps since the start, halved at each reset.
     pub iteration: u32,
 }
 
@@ -61,11 +69,13 @@ impl Adam {
         }
     }
 
-    /// Forgets the moments (the decay keeps counting).
+    /// Starts a new phase: forgets the moments and halves the decay step
+    /// (module docs).
     pub fn reset(&mut self) {
         self.m.iter_mut().for_each(|x| *x = 0.0);
         self.v.iter_mut().for_each(|x| *x = 0.0);
         self.t = 0;
+        self.iteration /= 2;
     }
 
     /// Clamps `theta` into the bounds.
@@ -150,10 +160,31 @@ mod tests {
         a.step(&mut x, &[-3.0]).expect("finite");
         assert!((x[0] - 0.25).abs() < 1e-9);
         a.reset();
-        assert_eq!((a.t, a.m[0], a.v[0], a.iteration), (0, 0.0, 0.0, 1));
+        assert_eq!((a.t, a.m[0], a.v[0], a.iteration), (0, 0.0, 0.0, 0));
         let json = serde_json::to_string(&a).expect("serialise");
         let back: Adam = serde_json::from_str(&json).expect("parse");
         assert_eq!(back, a);
+    }
+
+    #[test]
+    fn a_reset_steps_the_decay_back_to_half_the_iterations_run() {
+        let mut a = adam(1.0, [-f64::MAX, f64::MAX]);
+        a.settings.decay = 0.9;
+        let mut x = [0.0];
+        for _ in 0..10 {
+            a.step(&mut x, &[-1.0]).expect("finite");
+        }
+        a.reset();
+        // The first step of the new phase has Adam's unit normalised step
+        // times the step size of iteration 5, not of iteration 10.
+        let before = x[0];
+        a.step(&mut x, &[-1.0]).expect("finite");
+        assert!(
+            (x[0] - before - 0.9f64.powi(5)).abs() < 1e-9,
+            "{}",
+            x[0] - before
+        );
+        assert_eq!((a.t, a.iteration), (1, 6));
     }
 
     #[test]

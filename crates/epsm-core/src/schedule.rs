@@ -10,7 +10,8 @@
 //! (`optimizer.l2_fraction`) or, by default, when the OT phase stops
 //! improving ([`Plateau`]). Problems whose parameters are all material
 //! values, and problems with an L2 loss, are L2 throughout. Adam is reset
-//! at the switch.
+//! at the switch ([`crate::optim::Adam::reset`]: new moments, and the step
+//! size of half the iterations run so far).
 
 use serde::{Deserialize, Serialize};
 

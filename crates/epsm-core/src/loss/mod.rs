@@ -41,12 +41,14 @@ use crate::run::{OptResult, OptimizeError};
 mod flow;
 mod image;
 mod ot;
+mod outliers;
 #[cfg(test)]
 mod tests;
 
 pub use flow::add_flow;
 pub use image::{resample, rmse};
 pub use ot::{ImageMatch, match_images, matcher_named, points};
+pub use outliers::{OUTLIER_RATIO, despeckle};
 
 /// Which loss to use.
 #[derive(Clone, Copy, Debug, PartialEq)]

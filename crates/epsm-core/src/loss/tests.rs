@@ -25,6 +25,33 @@ fn ot_pulls_a_bright_pixel_toward_the_target_one() {
 }
 
 #[test]
+fn a_target_firefly_pulls_the_match_until_it_is_replaced() {
+    // The same blob in both images; the target also has a firefly.
+    let img = blob(8.0);
+    let mut target = blob(8.0);
+    target.set(13, 3, Vec3::splat(40.0));
+    let raw = evaluate(LossKind::OtExact, &img, &target, 1.0, None).expect("loss");
+    let (clean, replaced) = despeckle(&target);
+    assert_eq!(replaced.iter().filter(|&&r| r).count(), 1);
+    assert!(replaced[3 * 16 + 13]);
+    let e = evaluate(LossKind::OtExact, &img, &clean, 1.0, None).expect("loss");
+    assert!(raw.value > 1e-4, "raw loss {}", raw.value);
+    assert!(
+        e.value < 1e-3 * raw.value,
+        "{} against {}",
+        e.value,
+        raw.value
+    );
+    let pull = |l: &LossEval| l.g_xy.iter().map(|g| g.length()).fold(0.0, f64::max);
+    assert!(
+        pull(&e) < 1e-3 * pull(&raw),
+        "{} against {}",
+        pull(&e),
+        pull(&raw)
+    );
+}
+
+#[test]
 fn l2_gradient_matches_a_finite_difference() {
     let (img, target) = (dot(4, 4, (1, 1)), dot(4, 4, (2, 2)));
     let e = evaluate(LossKind::L2, &img, &target, 1.0, None).expect("loss");

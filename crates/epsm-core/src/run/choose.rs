@@ -109,7 +109,7 @@ pub(super) fn choose(
             let (w, latest) = (window(n), latest_switch(n));
             if ot {
                 let why = format!(
-                    "switch from OT to L2 (Adam reset) once the OT loss's moving average has not \
+                    "switch from OT to L2 (Adam reset, the step size of half the iterations run) once the OT loss's moving average has not \
                      fallen by 1 % for {w} iterations, at the latest before iteration {latest}"
                 );
                 choices.push(Choice::new("optimizer.l2_fraction", "on plateau", why));

@@ -85,7 +85,11 @@ impl Optimization {
         let mut loss = evaluate(
             kind,
             &image,
-            &self.target_match,
+            if kind.is_ot() {
+                &self.target_ot
+            } else {
+                &self.target_match
+            },
             self.problem.loss.lambda,
             Some(warm),
         )?;

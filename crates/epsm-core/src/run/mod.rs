@@ -58,7 +58,7 @@ use choose::choose;
 pub use error::{OptResult, OptimizeError};
 pub use gradient::GradientEval;
 
-use crate::loss::{resample, rmse};
+use crate::loss::{OUTLIER_RATIO, despeckle, resample, rmse};
 use crate::optim::{Adam, AdamSettings};
 use crate::params::ParamTable;
 use crate::problem::auto::{self, Choice};
@@ -76,6 +76,9 @@ pub struct Optimization {
     grad: View,
     target: Image,
     target_match: Image,
+    /// The OT loss's target: `target` without its isolated outlier pixels
+    /// ([`despeckle`]), at the match resolution.
+    target_ot: Image,
     theta: Vec<f64>,
     adam: Adam,
     iteration: u32,
@@ -145,10 +148,24 @@ impl Optimization {
             }
         };
         let target_match = resample(&target, mw, mh);
+        let (clean, outliers) = despeckle(&target);
+        let target_ot = resample(&clean, mw, mh);
         primal.set(&theta);
         grad.set(&theta);
         let mut choices = Vec::new();
         let (schedule, judge) = choose(&mut problem, &grad, &target_match, &mut choices);
+        let outliers = outliers.iter().filter(|&&o| o).count();
+        if outliers > 0 && schedule.loss_at(0).is_ot() {
+            choices.push(Choice::new(
+                "target.outliers",
+                outliers.to_string(),
+                format!(
+                    "isolated target pixels more than {OUTLIER_RATIO} times as bright as each \
+                     neighbour (fireflies): the OT loss matches a target with each replaced by \
+                     its neighbours' median"
+                ),
+            ));
+        }
         let o = &problem.optimizer;
         let smoothing = (o.method == Method::Prdpt)
             .then(|| Smoothing::new(&problem.params, o.iterations, o.decay.unwrap_or(1.0)));
@@ -175,6 +192,7 @@ impl Optimization {
             grad,
             target,
             target_match,
+            target_ot,
             theta,
             adam,
             iteration: 0,
