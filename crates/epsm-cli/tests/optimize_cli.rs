@@ -161,7 +161,7 @@ fn run_reports_count_unconverged_entropic_solves() {
 /// README's main command, with the problem's automatic settings (no tuning
 /// keys) and its seed: the best θ's light ends within 2 % of the box size
 /// (0.04) of the truth, the caustic problem's tolerance (seeds 1–3
-/// measured 0.037, 0.013 and 0.018 with connections through glass).
+/// measured 0.016, 0.0025 and 0.0041).
 #[test]
 fn the_readmes_caustic_job_reaches_its_target() {
     let (run, dir) = optimize_into("../../scenes/problems/caustic.toml", "readme-job");
