@@ -10,6 +10,7 @@
 
 #![allow(unsafe_code)]
 
+use std::arch::asm;
 use std::arch::x86_64::*;
 
 use super::{Cmp, LANES, Lanes, Mask16, Portable, Registers};
@@ -17,10 +18,12 @@ use crate::bvh::Avx2;
 
 /// Runs an AVX2 intrinsic expression.
 ///
-/// SAFETY (every use): the expression calls AVX and AVX2 intrinsics inside
-/// a method of [`Avx2`], whose `self` exists only after
-/// [`Avx2::detect`] found AVX, AVX2, BMI1, BMI2, LZCNT and POPCNT; pointer
-/// arguments, where an intrinsic takes one, are stated at the use.
+/// SAFETY (every use): the expression calls AVX and AVX2 intrinsics (or
+/// this module's functions that require AVX) inside a method of [`Avx2`]
+/// or a helper only those methods call, and a value of [`Avx2`] exists
+/// only after [`Avx2::detect`] found AVX, AVX2, BMI1, BMI2, LZCNT and
+/// POPCNT; pointer arguments, where an intrinsic takes one, are stated at
+/// the use.
 macro_rules! avx {
     ($e:expr) => {
         // SAFETY: see the macro's documentation.
@@ -131,17 +134,58 @@ fn byte_lanes(bytes: u64) -> __m256i {
     avx!(_mm256_cvtepu8_epi32(_mm_cvtsi64_si128(bytes as i64)))
 }
 
+/// `vmovmskps`: the sign bits of the eight lanes of `v` (bit `i`: lane
+/// `i`). In inline assembly: LLVM rewrites two `_mm256_movemask_ps` joined
+/// into one `u16` (what [`pack32`] does) as a chain of packs and shuffles,
+/// twice the instructions, on the port the broadcasts and permutes need.
+#[target_feature(enable = "avx")]
+#[inline]
+fn movemask_ps(v: __m256) -> u32 {
+    let bits: u32;
+    // SAFETY: `vmovmskps` (AVX, which this function requires) reads one
+    // register and writes another: no memory, no stack, no flags.
+    unsafe {
+        asm!(
+            "vmovmskps {bits:e}, {v}",
+            bits = out(reg) bits,
+            v = in(ymm_reg) v,
+            options(pure, nomem, nostack, preserves_flags),
+        );
+    }
+    bits
+}
+
+/// `vmovmskpd`: the sign bits of the four lanes of `v`, in inline
+/// assembly as [`movemask_ps`] (LLVM rewrites four `_mm256_movemask_pd`
+/// joined into one `u16` likewise).
+#[target_feature(enable = "avx")]
+#[inline]
+fn movemask_pd(v: __m256d) -> u32 {
+    let bits: u32;
+    // SAFETY: `vmovmskpd` (AVX, which this function requires) reads one
+    // register and writes another: no memory, no stack, no flags.
+    unsafe {
+        asm!(
+            "vmovmskpd {bits:e}, {v}",
+            bits = out(reg) bits,
+            v = in(ymm_reg) v,
+            options(pure, nomem, nostack, preserves_flags),
+        );
+    }
+    bits
+}
+
 /// The mask of two 32-bit-lane vector masks (their sign bits).
 #[inline(always)]
 fn pack32(m: [__m256; 2]) -> Mask16 {
-    let [lo, hi] = each!(2, _mm256_movemask_ps(m));
+    let [lo, hi] = each!(2, movemask_ps(m));
     Mask16(lo as u16 | (hi as u16) << 8)
 }
 
 /// The mask of four 64-bit-lane vector masks (their sign bits).
 #[inline(always)]
 fn pack64(m: [__m256d; 4]) -> Mask16 {
-    let q = each!(4, _mm256_movemask_pd(m));
+    let q = each!(4, movemask_pd(m));
     Mask16((q[0] | q[1] << 4 | q[2] << 8 | q[3] << 12) as u16)
 }
 
