@@ -209,6 +209,7 @@ pub(crate) trait F64Ops: Registers {
     fn f64_sqrt(self, a: Self::F64) -> Self::F64;
     fn f64_abs(self, a: Self::F64) -> Self::F64;
     fn f64_min(self, a: Self::F64, b: Self::F64) -> Self::F64;
+    fn f64_max(self, a: Self::F64, b: Self::F64) -> Self::F64;
     fn f64_select(self, m: Mask16, a: Self::F64, b: Self::F64) -> Self::F64;
     fn f64_copysign(self, magnitude: Self::F64, sign: Self::F64) -> Self::F64;
     fn f64_cmp(self, a: Self::F64, b: Self::F64, c: Cmp) -> Mask16;
@@ -248,6 +249,7 @@ pub(crate) trait U32Ops: Registers {
 #[allow(unsafe_code)]
 pub(crate) trait U64Ops: Registers {
     fn u64_splat(self, x: u64) -> Self::U64;
+    #[cfg(test)]
     fn u64_load(self, lanes: [u64; LANES]) -> Self::U64;
     fn u64_store(self, v: Self::U64) -> [u64; LANES];
     fn u64_add(self, a: Self::U64, b: Self::U64) -> Self::U64;

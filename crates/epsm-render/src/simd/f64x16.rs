@@ -61,6 +61,12 @@ impl<B: Lanes> F64x16<B> {
         Self(self.1.f64_min(self.0, o.0), self.1)
     }
 
+    /// `if self > o { self } else { o }` (module docs of `simd`).
+    #[inline(always)]
+    pub fn max(self, o: Self) -> Self {
+        Self(self.1.f64_max(self.0, o.0), self.1)
+    }
+
     clamp!("f64");
 
     /// `a` in the lanes of `m`, `b` in the others.
@@ -70,8 +76,6 @@ impl<B: Lanes> F64x16<B> {
     }
 
     compare! { f64_cmp;
-        /// `self < o` (false on NaN).
-        lt, Lt;
         /// `self <= o` (false on NaN).
         le, Le;
         /// `self > o` (false on NaN).

@@ -79,16 +79,17 @@ macro_rules! compare {
 }
 
 /// Defines `clamp` for a float lane type (inside its `impl`), from its
-/// `select`, `lt` and `gt`: the scalar type's `clamp` per lane (`lo` below
-/// it, `hi` above it, NaN stays NaN), the same two comparisons in the same
-/// order.
+/// `max` and `min`: the scalar type's `clamp` per lane (`lo` below it, `hi`
+/// above it, NaN stays NaN). `lo.max(x)` is `if lo > x { lo } else { x }`,
+/// the scalar `if x < lo { lo } else { x }`; `hi.min(x)` likewise its
+/// `if x > hi { hi } else { x }`: the same two comparisons, in the same
+/// order, one instruction each (no mask).
 macro_rules! clamp {
     ($scalar:literal) => {
         #[doc = concat!("Rust's `", $scalar, "::clamp`: `lo` below it, `hi` above it, NaN stays NaN.")]
         #[inline(always)]
         pub fn clamp(self, lo: Self, hi: Self) -> Self {
-            let x = Self::select(self.lt(lo), lo, self);
-            Self::select(x.gt(hi), hi, x)
+            hi.min(lo.max(self))
         }
     };
 }

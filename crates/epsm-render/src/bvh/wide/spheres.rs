@@ -195,7 +195,10 @@ fn intersect<B: Lanes>(
     let near_in = t_min.le(near) & near.le(t_max);
     let far_in = t_min.le(far) & far.le(t_max);
     let hit = ok & (near_in | far_in);
-    hit.any().then(|| (hit, F64x16::select(near_in, near, far)))
+    if !hit.any() {
+        return None;
+    }
+    Some((hit, F64x16::select(near_in, near, far)))
 }
 
 /// [`sphere::local_coords`](crate::sphere::local_coords) per lane: the

@@ -107,18 +107,25 @@ impl Materials16 {
     /// The kinds and flags of the materials of the `active` lanes.
     #[inline(always)]
     pub(super) fn kinds<B: Lanes>(&self, k: B, material: U32x16<B>, active: Mask16) -> Kinds {
-        let splat = |x: u32| U32x16::splat(k, x);
-        let class = U32x16::gather(&self.class, material, active, splat(0));
-        let kind = class & splat(KIND);
-        let of = |code: u32| kind.eq(splat(code)) & active;
-        let flag = |bit: u32| (class & splat(bit)).eq(splat(bit)) & active;
+        let class = U32x16::gather(&self.class, material, active, k.u32(0));
+        let kind = class & k.u32(KIND);
+        // The lanes of kind `code`; the lanes with flag `bit` (plain
+        // functions, not closures: module `simd`).
+        #[inline(always)]
+        fn of<B: Lanes>(k: B, kind: U32x16<B>, code: u32) -> Mask16 {
+            kind.eq(k.u32(code))
+        }
+        #[inline(always)]
+        fn flag<B: Lanes>(k: B, class: U32x16<B>, bit: u32) -> Mask16 {
+            (class & k.u32(bit)).eq(k.u32(bit))
+        }
         Kinds {
-            diffuse: of(DIFFUSE),
-            conductor: of(CONDUCTOR),
-            rough: of(ROUGH_CONDUCTOR),
-            dielectric: of(DIELECTRIC),
-            two_sided: flag(TWO_SIDED),
-            image: flag(IMAGE),
+            diffuse: of(k, kind, DIFFUSE) & active,
+            conductor: of(k, kind, CONDUCTOR) & active,
+            rough: of(k, kind, ROUGH_CONDUCTOR) & active,
+            dielectric: of(k, kind, DIELECTRIC) & active,
+            two_sided: flag(k, class, TWO_SIDED) & active,
+            image: flag(k, class, IMAGE) & active,
         }
     }
 

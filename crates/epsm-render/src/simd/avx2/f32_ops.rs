@@ -118,11 +118,17 @@ impl F32Ops for Avx2 {
     #[inline(always)]
     fn f32_permute(self, a: Self::F32, index: Self::U32) -> Self::F32 {
         // Each output register picks from both input registers by the
-        // index's low three bits, then by its bit 3 between the two.
-        let eight = self.u32_splat(8);
-        let high = each!(2, _mm256_cmpeq_epi32(self.u32_and(index, eight), eight));
-        let from = |r: usize| each!(2, _mm256_permutevar8x32_ps([a[r], a[r]], index));
-        let (lo, hi) = (from(0), from(1));
+        // index's low three bits, then by its bit 3 (shifted to the sign
+        // bit, which `blendv` reads) between the two.
+        let lo = avx!([
+            _mm256_permutevar8x32_ps(a[0], index[0]),
+            _mm256_permutevar8x32_ps(a[0], index[1]),
+        ]);
+        let hi = avx!([
+            _mm256_permutevar8x32_ps(a[1], index[0]),
+            _mm256_permutevar8x32_ps(a[1], index[1]),
+        ]);
+        let high = each!(2, _mm256_slli_epi32::<28>(index));
         let high = each!(2, _mm256_castsi256_ps(high));
         each!(2, _mm256_blendv_ps(lo, hi, high))
     }
@@ -146,7 +152,26 @@ impl F32Ops for Avx2 {
     }
     #[inline(always)]
     unsafe fn f32_expand(self, a: Self::F32, m: Mask16, src: &[f32]) -> Self::F32 {
-        // SAFETY: the caller's contract is the portable method's.
-        self.f32_load(unsafe { Portable.f32_expand(self.f32_store(a), m, src) })
+        // Each half loads its lanes' values (the first of `src` for lanes
+        // 0–7, the next for lanes 8–15) and spreads them over its lanes.
+        let take = [u32::from(m.0 & 0xFF), u32::from(m.0 >> 8)];
+        let from = [0, take[0].count_ones() as usize];
+        let set = mask32(m);
+        let mut out = a;
+        for h in 0..2 {
+            let n = take[h].count_ones();
+            // SAFETY: the CPU has AVX2 (the token, macro `avx`); the masked load reads `src[from[h] + j]` for `j < n`
+            // only (masked-off lanes are not accessed and do not fault):
+            // `from[h] + n ≤ m.count() ≤ src.len()` by the caller's
+            // contract, so the pointer (at most one past the end) and every
+            // read are in bounds.
+            let values = unsafe { _mm256_maskload_ps(src.as_ptr().add(from[h]), first32(n)) };
+            let spread = avx!(_mm256_permutevar8x32_ps(
+                values,
+                byte_lanes(EXPAND32[take[h] as usize])
+            ));
+            out[h] = avx!(_mm256_blendv_ps(a[h], spread, _mm256_castsi256_ps(set[h])));
+        }
+        out
     }
 }

@@ -12,7 +12,12 @@ impl F64Ops for Avx2 {
     #[inline(always)]
     fn f64_load(self, lanes: [f64; LANES]) -> Self::F64 {
         // Each `loadu` reads four of the sixteen `f64` of `lanes`.
-        std::array::from_fn(|q| avx!(_mm256_loadu_pd(lanes[4 * q..].as_ptr())))
+        avx!([
+            _mm256_loadu_pd(lanes.as_ptr()),
+            _mm256_loadu_pd(lanes[4..].as_ptr()),
+            _mm256_loadu_pd(lanes[8..].as_ptr()),
+            _mm256_loadu_pd(lanes[12..].as_ptr()),
+        ])
     }
     #[inline(always)]
     fn f64_store(self, v: Self::F64) -> [f64; LANES] {
@@ -56,6 +61,10 @@ impl F64Ops for Avx2 {
     #[inline(always)]
     fn f64_min(self, a: Self::F64, b: Self::F64) -> Self::F64 {
         each!(4, _mm256_min_pd(a, b))
+    }
+    #[inline(always)]
+    fn f64_max(self, a: Self::F64, b: Self::F64) -> Self::F64 {
+        each!(4, _mm256_max_pd(a, b))
     }
     #[inline(always)]
     fn f64_select(self, m: Mask16, a: Self::F64, b: Self::F64) -> Self::F64 {

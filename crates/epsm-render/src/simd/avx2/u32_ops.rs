@@ -66,8 +66,14 @@ impl U32Ops for Avx2 {
     }
     #[inline(always)]
     fn u32_select(self, m: Mask16, a: Self::U32, b: Self::U32) -> Self::U32 {
-        let m = mask32(m);
-        each!(2, _mm256_blendv_epi8(b, a, m))
+        // `blendv_ps` reads each lane's sign bit, as `mask32` sets it.
+        let m = each!(2, _mm256_castsi256_ps(mask32(m)));
+        let (a, b) = (
+            each!(2, _mm256_castsi256_ps(a)),
+            each!(2, _mm256_castsi256_ps(b)),
+        );
+        let blend = each!(2, _mm256_blendv_ps(b, a, m));
+        each!(2, _mm256_castps_si256(blend))
     }
     #[inline(always)]
     fn u32_lt(self, a: Self::U32, b: Self::U32) -> Mask16 {

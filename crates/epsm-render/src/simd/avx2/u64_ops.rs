@@ -9,10 +9,16 @@ impl U64Ops for Avx2 {
         let v = avx!(_mm256_set1_epi64x(x as i64));
         [v; 4]
     }
+    #[cfg(test)]
     #[inline(always)]
     fn u64_load(self, lanes: [u64; LANES]) -> Self::U64 {
         // Each `loadu` reads four of the sixteen `u64` of `lanes`.
-        std::array::from_fn(|q| avx!(_mm256_loadu_si256(lanes[4 * q..].as_ptr().cast())))
+        avx!([
+            _mm256_loadu_si256(lanes.as_ptr().cast()),
+            _mm256_loadu_si256(lanes[4..].as_ptr().cast()),
+            _mm256_loadu_si256(lanes[8..].as_ptr().cast()),
+            _mm256_loadu_si256(lanes[12..].as_ptr().cast()),
+        ])
     }
     #[inline(always)]
     fn u64_store(self, v: Self::U64) -> [u64; LANES] {
@@ -81,7 +87,35 @@ impl U64Ops for Avx2 {
     }
     #[inline(always)]
     unsafe fn u64_expand(self, a: Self::U64, m: Mask16, src: &[u64]) -> Self::U64 {
-        // SAFETY: the caller's contract is the portable method's.
-        self.u64_load(unsafe { Portable.u64_expand(self.u64_store(a), m, src) })
+        // Each quarter loads its lanes' values (from past those of the
+        // quarters before it) and spreads them over its lanes: 64-bit lane
+        // `r` is 32-bit lanes `2r` and `2r + 1`.
+        let set = mask64(m);
+        let mut out = a;
+        let mut from = 0usize;
+        for q in 0..4 {
+            let take = u32::from(m.0 >> (4 * q) & 0xF);
+            let n = take.count_ones();
+            let index = byte_lanes(EXPAND64[take as usize]);
+            let first = avx!(_mm256_cmpgt_epi64(
+                _mm256_set1_epi64x(i64::from(n)),
+                _mm256_setr_epi64x(0, 1, 2, 3)
+            ));
+            // SAFETY: the CPU has AVX2 (the token, macro `avx`); the masked load reads `src[from + j]` for `j < n`
+            // only (masked-off lanes are not accessed and do not fault):
+            // `from + n ≤ m.count() ≤ src.len()` by the caller's contract,
+            // so the pointer (at most one past the end) and every read are
+            // in bounds.
+            let values = unsafe { _mm256_maskload_epi64(src.as_ptr().add(from).cast(), first) };
+            let spread = avx!(_mm256_permutevar8x32_epi32(values, index));
+            let blend = avx!(_mm256_blendv_pd(
+                _mm256_castsi256_pd(a[q]),
+                _mm256_castsi256_pd(spread),
+                _mm256_castsi256_pd(set[q])
+            ));
+            out[q] = avx!(_mm256_castpd_si256(blend));
+            from += n as usize;
+        }
+        out
     }
 }

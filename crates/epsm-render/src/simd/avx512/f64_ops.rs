@@ -59,6 +59,10 @@ impl F64Ops for Avx512 {
         both!(_mm512_min_pd(a, b))
     }
     #[inline(always)]
+    fn f64_max(self, a: Self::F64, b: Self::F64) -> Self::F64 {
+        both!(_mm512_max_pd(a, b))
+    }
+    #[inline(always)]
     fn f64_select(self, m: Mask16, a: Self::F64, b: Self::F64) -> Self::F64 {
         both!(_mm512_mask_blend_pd(halves(m), b, a))
     }

@@ -9,6 +9,7 @@ impl U64Ops for Avx512 {
         let v = avx!(_mm512_set1_epi64(x as i64));
         [v, v]
     }
+    #[cfg(test)]
     #[inline(always)]
     fn u64_load(self, lanes: [u64; LANES]) -> Self::U64 {
         // Each `loadu` reads eight of the sixteen `u64` of `lanes`.

@@ -50,6 +50,10 @@ impl F64Ops for Portable {
         zip(a, b, |a, b| if a < b { a } else { b })
     }
     #[inline(always)]
+    fn f64_max(self, a: Self::F64, b: Self::F64) -> Self::F64 {
+        zip(a, b, |a, b| if a > b { a } else { b })
+    }
+    #[inline(always)]
     fn f64_select(self, m: Mask16, a: Self::F64, b: Self::F64) -> Self::F64 {
         select(m, a, b)
     }

@@ -9,6 +9,7 @@ impl U64Ops for Portable {
     fn u64_splat(self, x: u64) -> Self::U64 {
         [x; LANES]
     }
+    #[cfg(test)]
     #[inline(always)]
     fn u64_load(self, lanes: [u64; LANES]) -> Self::U64 {
         lanes
