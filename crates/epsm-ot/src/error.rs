@@ -3,14 +3,21 @@
 //! Every public solver entry point validates its input and returns an
 //! [`OtError`] instead of panicking: empty clouds, clouds of different sizes,
 //! ragged coordinate columns, non-finite coordinates, invalid settings,
-//! clouds beyond a matcher's `f32` range, and entropic solves that ended
-//! with a non-finite loss, potential or marginal error.
+//! clouds beyond a matcher's `f32` range, entropic solves that ended
+//! with a non-finite loss, potential or marginal error, and a forced
+//! instruction set the CPU lacks.
 
 use thiserror::Error;
 
 /// Why a point cloud or a solve was rejected.
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum OtError {
+    /// An instruction set was forced ([`crate::force_simd`]) that the running CPU lacks.
+    #[error("this CPU does not support the `{simd}` instruction set")]
+    SimdUnavailable {
+        /// Its name: `avx512`, `avx2` or `portable`.
+        simd: &'static str,
+    },
     /// A point cloud with no points (n = 0).
     #[error("point cloud is empty (n = 0)")]
     Empty,

@@ -69,6 +69,7 @@ pub mod warm;
 #[cfg(test)]
 mod tests;
 
+pub use cpu::{Simd, active_simd, force_simd};
 pub use error::OtError;
 pub use estimate::{MatchEstimate, MatchLimits};
 pub use exact::ExactSettings;

@@ -84,7 +84,8 @@ pub struct SolveStats {
     pub pair_evaluations: u64,
     /// Candidate pairs in the sparse graph at the end (exact solver).
     pub candidate_pairs: usize,
-    /// Pairs added because the optimality check found them violated (exact solver).
+    /// Pairs the optimality checks added to the graph: violated ones, and in a
+    /// warm-started solve also those within `exact.warm_check_margin` of tight (exact solver).
     pub added_pairs: usize,
     /// Auctions stopped by their bid budget, whose prices were used as reached
     /// (exact solver, and the exact solves of the entropic solver's `exact_prices`).

@@ -5,7 +5,7 @@
 use std::ops::Range;
 
 use super::{Clustered, PotentialFit};
-use crate::cpu::{Simd, simd};
+use crate::cpu::{Simd, active_simd};
 use crate::points::{DIM, Point};
 
 /// The point-to-block bound of the module doc for a list of target blocks, as
@@ -114,18 +114,23 @@ impl PointCut {
     /// involved, far above the accumulated rounding of these few operations,
     /// so potentials of any size (clouds far apart) never cut a pair they should not.
     pub fn select(&self, x: &Point, limit: f32, out: &mut Selection) -> bool {
-        match simd() {
+        self.select_with(active_simd(), x, limit, out)
+    }
+
+    /// [`Self::select`] with the body compiled for `simd`, or the portable one if the running CPU lacks it.
+    fn select_with(&self, simd: Simd, x: &Point, limit: f32, out: &mut Selection) -> bool {
+        match simd {
             #[cfg(target_arch = "x86_64")]
             #[allow(unsafe_code)]
             // SAFETY: `select_avx512` only requires the four AVX-512 subsets it is
-            // compiled for, which `simd` detected on the running CPU; it is the same
+            // compiled for, which the guard detected on the running CPU; it is the same
             // safe code as `select_portable`.
-            Simd::Avx512 => unsafe { self.select_avx512(x, limit, out) },
+            Simd::Avx512 if simd.available() => unsafe { self.select_avx512(x, limit, out) },
             #[cfg(target_arch = "x86_64")]
             #[allow(unsafe_code)]
-            // SAFETY: `select_avx2` only requires AVX2 and FMA, which `simd` detected
+            // SAFETY: `select_avx2` only requires AVX2 and FMA, which the guard detected
             // on the running CPU; it is the same safe code as `select_portable`.
-            Simd::Avx2 => unsafe { self.select_avx2(x, limit, out) },
+            Simd::Avx2 if simd.available() => unsafe { self.select_avx2(x, limit, out) },
             _ => self.select_portable(x, limit, out),
         }
         !out.ranges.is_empty()
@@ -256,8 +261,19 @@ mod tests {
                 .map(reduced)
                 .fold(f64::INFINITY, f64::min);
             let limit = best + 30.0 * 1e-4;
-            cut.select(&p, limit as f32, &mut selection);
+            // Every body the CPU has (the portable one on any CPU) keeps the same blocks.
+            let bodies = Simd::supported();
+            let body = bodies[(i / 7) % bodies.len()];
+            cut.select_with(body, &p, limit as f32, &mut selection);
             let chosen: Vec<usize> = selection.kept().collect();
+            for &other in &bodies {
+                let mut again = Selection::default();
+                cut.select_with(other, &p, limit as f32, &mut again);
+                assert_eq!(
+                    again.ranges, selection.ranges,
+                    "point {i}: {other:?} vs {body:?}"
+                );
+            }
             for (k, c) in y.clusters.iter().enumerate() {
                 let needed = c.range.clone().any(|j| reduced(j) <= limit);
                 assert!(

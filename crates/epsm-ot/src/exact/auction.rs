@@ -40,13 +40,14 @@ pub(crate) fn run(
                 return false;
             }
             let (mut j1, mut r1, mut r2) = (NONE, f64::INFINITY, f64::INFINITY);
+            // Best and second-best column, written without branches (selects)
+            // so unpredictable comparisons cost no mispredictions.
             for &(j, c) in &edges[i as usize] {
                 let r = c + q[j as usize];
-                if r < r1 {
-                    (j1, r2, r1) = (j, r1, r);
-                } else if r < r2 {
-                    r2 = r;
-                }
+                let better = r < r1;
+                r2 = if better { r1 } else { r2.min(r) };
+                j1 = if better { j } else { j1 };
+                r1 = if better { r } else { r1 };
             }
             if j1 == NONE {
                 return false;

@@ -1,11 +1,20 @@
 //! Step 4 of `exact`: the streaming optimality check over all pairs.
 //!
-//! For the rows whose potential rose since the last check, every pair
-//! `(i, j)` is screened in `f32` ([`screened_block`]) and tested in `f64`
-//! only where the screen cannot rule out `c_ij − u_i − v_j < −tolerance`;
-//! whole block pairs are skipped where the rigorous bound of `blocks` proves
-//! them feasible. No violated pair is missed, so an empty result certifies
-//! that `u, v` are feasible for all n² pairs.
+//! For the rows that need it, every pair `(i, j)` is screened in `f32`
+//! ([`screened_block`]) and tested in `f64` only where the screen cannot rule
+//! out `c_ij − u_i − v_j < margin − tolerance`; whole block pairs are skipped
+//! where the rigorous bound of `blocks` proves them above the margin. No
+//! violated pair is missed, so a check that finds none certifies its rows.
+//!
+//! Each checked row leaves a **floor**: a lower bound on `c_ij − v_j` over
+//! every pair the check did not return. Column potentials only fall
+//! afterwards (augmenting paths lower them, auctions raise prices), so the
+//! bound holds for the rest of the solve, and a row whose `u_i` has not
+//! risen above its floor cannot have gained a violated pair outside the
+//! candidate graph (whose edges the sparse solve keeps feasible): it needs
+//! no new check (see `sparse::SparseAssignment::unsettled_rows`). A margin
+//! above 0 returns each row's near-tight pairs too and raises the floor by
+//! it, so the next rises of `u_i` by less than the margin need no check.
 
 use rayon::prelude::*;
 
@@ -15,26 +24,45 @@ use crate::cost::sq_dist_f64;
 /// A candidate edge `(row, column, cost)`.
 pub(crate) type Edge = (u32, u32, f64);
 
-/// For each row flagged in `rows`, its `per_row` most violated pairs
-/// (`c_ij − u_i − v_j < −tolerance`), and the number of pairs evaluated.
+/// What one check found.
+pub(crate) struct Check {
+    /// Each checked row's `per_row` pairs of smallest `c_ij − u_i − v_j`
+    /// among those below `margin − tolerance`.
+    pub found: Vec<Edge>,
+    /// How many of `found` are violated (below `−tolerance`).
+    pub violated: usize,
+    /// Pairs evaluated.
+    pub checked: u64,
+}
+
+/// Checks the rows flagged in `rows` against `u, v`: returns for each its
+/// `per_row` pairs of smallest reduced cost `c_ij − u_i − v_j` among those
+/// below `margin − tolerance`, and writes each checked row's floor (see the
+/// module doc) to `floors`: `u_i + margin`, or `u_i` plus the largest
+/// returned reduced cost when the row had more than `per_row` such pairs.
 ///
 /// Target blocks are skipped where the block-pair bound of `blocks` proves
-/// them feasible for the row's whole cluster, and then per point where the
+/// them above the margin for the row's whole cluster, and then per point where the
 /// distance to a block's bounding box less its largest `v_j` does
 /// ([`box_feasible`]). Each remaining pair is first screened in `f32` (see
 /// [`screened_block`]); only pairs the screen cannot rule out are tested in
-/// `f64`, so no violation is missed.
+/// `f64`, so no pair below the margin is missed.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn violations(
     x: &Clustered,
     y: &Clustered,
     u: &[f64],
     v: &[f64],
+    margin: f64,
     tolerance: f64,
     per_row: usize,
     rows: &[bool],
-) -> (Vec<Edge>, u64) {
-    let (fit_u, fit_v) = (fit_potentials(x, u), fit_potentials(y, v));
-    let (u32s, v32s) = (to_f32(u), to_f32(v));
+    floors: &mut [f64],
+) -> Check {
+    // Bounds and screens test against the raised row potentials `u + margin`.
+    let raised: Vec<f64> = u.iter().map(|&t| t + margin).collect();
+    let (fit_u, fit_v) = (fit_potentials(x, &raised), fit_potentials(y, v));
+    let (u32s, v32s) = (to_f32(&raised), to_f32(v));
     // Potentials beyond the f32 range: no screen, every pair is tested in f64.
     let screen = u32s.iter().chain(&v32s).all(|t| t.is_finite());
     let cols = y.cloud.columns();
@@ -48,24 +76,34 @@ pub(crate) fn violations(
                 .fold(f64::NEG_INFINITY, f64::max)
         })
         .collect();
-    let parts: Vec<(Vec<Edge>, u64)> = x
+    let mut floor_parts = Vec::with_capacity(x.clusters.len());
+    let mut rest = floors;
+    for c in &x.clusters {
+        let (part, tail) = rest.split_at_mut(c.range.len());
+        floor_parts.push(part);
+        rest = tail;
+    }
+    let parts: Vec<(Vec<Edge>, usize, u64)> = x
         .clusters
         .par_iter()
         .zip(&fit_u)
-        .map(|(ci, fi)| {
+        .zip(floor_parts)
+        .map(|((ci, fi), floors)| {
             let mut found = Vec::new();
+            let mut violated = 0;
             let mut checked = 0u64;
             if !rows[ci.range.clone()].iter().any(|&r| r) {
-                return (found, checked);
+                return (found, violated, checked);
             }
             let list = kept_targets(ci, fi, y, &fit_v, 0.0);
             let mut slack = [0.0f32; SCREEN_BLOCK];
             for i in ci.range.clone().filter(|&i| rows[i]) {
                 let p = x.cloud.point(i);
-                let mut row: Vec<(f64, u32, f64)> = Vec::new();
+                let mut row: Vec<Found> = Vec::new();
+                let mut dropped = false;
                 for &jb in &list {
                     let cj = &y.clusters[jb as usize];
-                    if box_feasible(cj.box_dist_sq(&p), u[i], max_v[jb as usize]) {
+                    if box_feasible(cj.box_dist_sq(&p), raised[i], max_v[jb as usize]) {
                         continue;
                     }
                     let range = cj.range.clone();
@@ -81,25 +119,35 @@ pub(crate) fn violations(
                             let c = sq_dist_f64(&p, &y.cloud.point(j));
                             let reduced = c - u[i] - v[j];
                             // Rounding of c, u and v is not a violation (matters for far-apart clouds).
-                            if reduced
-                                < -(tolerance + 4.0 * f64::EPSILON * (c + u[i].abs() + v[j].abs()))
-                            {
-                                row.push((reduced, j as u32, c));
+                            let rounding =
+                                tolerance + 4.0 * f64::EPSILON * (c + u[i].abs() + v[j].abs());
+                            if reduced < margin - rounding {
+                                row.push((reduced, j as u32, c, reduced < -rounding));
                                 if row.len() == 4 * per_row {
-                                    keep_worst(&mut row, per_row);
+                                    dropped |= keep_worst(&mut row, per_row);
                                 }
                             }
                         }
                     }
                 }
-                keep_worst(&mut row, per_row);
-                found.extend(row.into_iter().map(|(_, j, c)| (i as u32, j, c)));
+                dropped |= keep_worst(&mut row, per_row);
+                let rise = if dropped {
+                    row.iter().map(|e| e.0).fold(f64::NEG_INFINITY, f64::max)
+                } else {
+                    margin
+                };
+                floors[i - ci.range.start] = u[i] + rise;
+                violated += row.iter().filter(|e| e.3).count();
+                found.extend(row.into_iter().map(|(_, j, c, _)| (i as u32, j, c)));
             }
-            (found, checked)
+            (found, violated, checked)
         })
         .collect();
-    let checked = parts.iter().map(|p| p.1).sum();
-    (parts.into_iter().flat_map(|p| p.0).collect(), checked)
+    Check {
+        violated: parts.iter().map(|p| p.1).sum(),
+        checked: parts.iter().map(|p| p.2).sum(),
+        found: parts.into_iter().flat_map(|p| p.0).collect(),
+    }
 }
 
 /// Whether the box bound proves `c_ij − u − v_j ≥ 0` for every member `j` of a
@@ -114,12 +162,18 @@ fn box_feasible(box_sq: f64, u: f64, max_v: f64) -> bool {
     box_sq - u - max_v >= 16.0 * f64::EPSILON * (box_sq + u.abs() + max_v.abs())
 }
 
-/// Keeps the `per_row` most violated pairs (smallest reduced cost, ties by column) of `row`.
-fn keep_worst(row: &mut Vec<(f64, u32, f64)>, per_row: usize) {
+/// A pair a check returns: reduced cost, column, cost, and whether it is violated.
+type Found = (f64, u32, f64, bool);
+
+/// Keeps the `per_row` most violated pairs (smallest reduced cost, ties by column) of `row`,
+/// and returns whether any was dropped.
+fn keep_worst(row: &mut Vec<Found>, per_row: usize) -> bool {
     if row.len() > per_row {
         row.select_nth_unstable_by(per_row, |a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         row.truncate(per_row);
+        return true;
     }
+    false
 }
 
 /// Targets screened per call of [`screened_block`].
@@ -216,6 +270,70 @@ mod tests {
         let mut slack = vec![0.0f32; n];
         screened_block(&p, -1.0, &cols, &vec![0.0; n], 0..n, &mut slack);
         assert!(slack.iter().all(|&s| s >= 0.0));
+    }
+
+    #[test]
+    fn every_pair_a_check_does_not_return_lies_above_its_rows_floor() {
+        // Potentials near optimal (u_i = row minimum − noise), so rows have
+        // violated, near-tight and far pairs; margins 0 (cold) and positive (warm),
+        // per-row caps small enough to drop pairs (floor from the kept ones) and not.
+        let mut rng = Rng::new(11);
+        let n = 600;
+        let x = Clustered::new(&crate::tests::random_cloud(&mut rng, n, 1.0), 16);
+        let y = Clustered::new(&crate::tests::random_cloud(&mut rng, n, 1.0), 16);
+        let v: Vec<f64> = (0..n).map(|_| 0.05 * f64::from(rng.uniform())).collect();
+        let cost = |i: usize, j: usize| sq_dist_f64(&x.cloud.point(i), &y.cloud.point(j));
+        let u: Vec<f64> = (0..n)
+            .map(|i| {
+                let best = (0..n)
+                    .map(|j| cost(i, j) - v[j])
+                    .fold(f64::INFINITY, f64::min);
+                best + 0.01 * f64::from(rng.uniform())
+            })
+            .collect();
+        let rows: Vec<bool> = (0..n).map(|i| i % 3 != 0).collect();
+        for (margin, per_row) in [(0.0, 32), (0.02, 32), (0.02, 2)] {
+            let mut floors = vec![f64::NEG_INFINITY; n];
+            let check = violations(&x, &y, &u, &v, margin, 0.0, per_row, &rows, &mut floors);
+            let mut returned = vec![false; n * n];
+            for &(i, j, c) in &check.found {
+                returned[i as usize * n + j as usize] = true;
+                assert_eq!(c, cost(i as usize, j as usize));
+            }
+            let mut violated = 0;
+            let mut returned_violated = 0;
+            let mut dropped = 0;
+            for i in 0..n {
+                if !rows[i] {
+                    assert_eq!(
+                        floors[i],
+                        f64::NEG_INFINITY,
+                        "unchecked row {i} keeps its floor"
+                    );
+                    continue;
+                }
+                assert!(floors[i] <= u[i] + margin, "row {i}");
+                dropped += usize::from(floors[i] < u[i] + margin);
+                for j in 0..n {
+                    let c = cost(i, j);
+                    let reduced = c - u[i] - v[j];
+                    let rounding = 4.0 * f64::EPSILON * (c + u[i].abs() + v[j].abs());
+                    violated += usize::from(reduced < -rounding);
+                    if returned[i * n + j] {
+                        returned_violated += usize::from(reduced < -rounding);
+                    } else {
+                        assert!(
+                            c - v[j] >= floors[i] - rounding,
+                            "margin {margin}: pair ({i}, {j}) below the floor"
+                        );
+                    }
+                }
+            }
+            assert_eq!(check.violated, returned_violated);
+            assert!(violated > 0 && check.violated > 0);
+            assert!(check.found.len() > rows.iter().filter(|&&r| r).count());
+            assert_eq!(dropped > 0, per_row == 2, "margin {margin}, cap {per_row}");
+        }
     }
 
     #[test]

@@ -4,20 +4,29 @@
 
 use std::time::Instant;
 
-use super::check::violations;
+use super::check::{Check, violations};
 use super::sparse::SparseAssignment;
 use super::{ExactSettings, SortedAssignment, auction};
 use crate::clusters::Clustered;
 use crate::cost::sq_dist_f64;
 use crate::plan::SolveStats;
 
+/// How [`finish`] re-prices and checks: the cold and the warm-started solve differ.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Pass {
+    /// First ε of re-pricing auctions, × diameter².
+    pub auction_start: f64,
+    /// Margin of the optimality checks (see `check`), × diameter².
+    pub check_margin: f64,
+}
+
 /// Steps 3–4 of the module doc from a sparse assignment: shortest augmenting
 /// paths, then optimality checks adding violated pairs, until the check finds none.
 ///
-/// Any start gives the optimal matching: the loop ends only on a check of all
-/// pairs against the final potentials (rows whose potential did not rise
-/// since an earlier check cannot have gained a violation). `stats` carries
-/// the work done before; re-pricing auctions start at `auction_start` (× diameter²).
+/// Any start gives the optimal matching: the loop ends only when every row
+/// is certified against the final potentials, by a check that finds no
+/// violated pair or by its floor from an earlier check (see `check`).
+/// `stats` carries the work done before.
 pub(super) fn finish(
     x: &Clustered,
     y: &Clustered,
@@ -25,10 +34,9 @@ pub(super) fn finish(
     settings: &ExactSettings,
     mut lsap: SparseAssignment,
     mut stats: SolveStats,
-    auction_start: f64,
+    pass: Pass,
 ) -> SortedAssignment {
     let n = x.cloud.len();
-    let k = settings.candidates;
     let mut phases = std::mem::take(&mut stats.phases);
     let first = stats.iterations;
     loop {
@@ -39,12 +47,13 @@ pub(super) fn finish(
             // shortest-augmenting-path search per free row from poor potentials.
             // (Not on the first round: its prices come fresh from an auction, and
             // the rows its greedy start leaves free are each a short search.)
-            let (edges, v) = lsap.into_parts();
+            // The auction only raises prices (lowers v), so the floors stay valid.
+            let (edges, v, floors) = lsap.into_parts();
             let (v, finished) = phases.time("auction", || {
-                auction_potentials(&edges, v, diameter_sq, auction_start, settings)
+                auction_potentials(&edges, v, diameter_sq, pass.auction_start, settings)
             });
             stats.auction_budget_stops += usize::from(!finished);
-            lsap = SparseAssignment::new(edges, v);
+            lsap = SparseAssignment::with_floors(edges, v, floors);
         }
         let augment_start = Instant::now();
         for i in lsap.free_rows() {
@@ -68,21 +77,13 @@ pub(super) fn finish(
             }
         }
         phases.add("augment", augment_start.elapsed().as_secs_f64());
-        // Optimality check over all pairs; add each row's worst violators and solve again.
-        let rows = lsap.take_raised();
-        let (violations, checked) = phases.time("check", || {
-            violations(
-                x,
-                y,
-                &lsap.u,
-                &lsap.v,
-                settings.tolerance,
-                VIOLATORS_PER_CANDIDATE * k,
-                &rows,
-            )
+        // Optimality check over all pairs of the unsettled rows; add each row's
+        // worst violators (and near-tight pairs) and solve again.
+        let check = phases.time("check", || {
+            check_rows(x, y, settings, &mut lsap, pass, diameter_sq)
         });
-        stats.pair_evaluations += checked;
-        if violations.is_empty() {
+        stats.pair_evaluations += check.checked;
+        if check.violated == 0 {
             stats.candidate_pairs = lsap.edge_count();
             stats.phases = phases;
             let perm = lsap.permutation();
@@ -95,9 +96,32 @@ pub(super) fn finish(
                 stats,
             };
         }
-        stats.added_pairs += violations.len();
-        lsap.add_edges(&violations);
+        stats.added_pairs += lsap.add_edges(&check.found);
     }
+}
+
+/// The optimality check of the rows of `lsap` above their floors, which it updates.
+pub(crate) fn check_rows(
+    x: &Clustered,
+    y: &Clustered,
+    settings: &ExactSettings,
+    lsap: &mut SparseAssignment,
+    pass: Pass,
+    diameter_sq: f64,
+) -> Check {
+    let rows = lsap.unsettled_rows();
+    let (u, v, floors) = lsap.check_view();
+    violations(
+        x,
+        y,
+        u,
+        v,
+        pass.check_margin * diameter_sq,
+        settings.tolerance,
+        VIOLATORS_PER_CANDIDATE * settings.candidates,
+        &rows,
+        floors,
+    )
 }
 
 /// Column potentials from an ε-scaling auction on `edges` started at prices `−v`,

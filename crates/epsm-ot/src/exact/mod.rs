@@ -30,8 +30,10 @@
 //!    more than 1/16 of the rows are unmatched (after step 4 added violated
 //!    pairs), the auction first re-prices all rows from the current potentials.
 //! 4. **Optimality check**: a streaming pass over all pairs of the rows whose
-//!    potential rose since the last check (the others cannot have gained a
-//!    violation: see `sparse`; each pair is screened in `f32` first and
+//!    potential rose above their **floor** (a lower bound on `c_ij − v_j` over
+//!    the pairs outside the graph, left by the row's last check and kept
+//!    valid because column potentials only fall; the other rows cannot have
+//!    gained a violation, see `check`; each pair is screened in `f32` first and
 //!    tested in `f64` only if the screen cannot rule it out; block pairs are
 //!    skipped only when a rigorous bound proves `c_ij − u_i − v_j ≥ 0` for
 //!    all of them, see `clusters`) collects every pair with reduced cost below
@@ -39,6 +41,9 @@
 //!    graph and the augmenting-path solve resumes. When none
 //!    remain, `u, v` are feasible for the full problem and tight on the
 //!    matching, so the matching is optimal (to within `n · tolerance` in total cost).
+//!    A warm-started solve checks with a margin (`exact.warm_check_margin`):
+//!    it also adds each row's pairs within the margin of tight and raises the
+//!    row's floor by it.
 //!
 //! | key                    | meaning                                    | default |
 //! |------------------------|--------------------------------------------|---------|
@@ -48,6 +53,7 @@
 //! | `exact.auction_start`  | first ε of the auction, × diameter²        | 0.025   |
 //! | `exact.auction_end`    | last ε of the auction, × diameter²         | 2.5e-10 |
 //! | `exact.warm_auction_start` | first ε of a warm-started solve's auctions, × diameter² | 1e-4 |
+//! | `exact.warm_check_margin` | margin of a warm-started solve's checks, × diameter² | 5e-4 |
 //! | `exact.warm_start`     | Sinkhorn settings of the warm start        | blur 0.03, one update per scale, ≤ 10 polish updates |
 
 mod auction;
@@ -68,7 +74,7 @@ use crate::error::OtError;
 use crate::plan::{OtResult, PhaseTimes, SolveStats};
 use crate::points::{PointCloud, check_pair};
 use crate::sinkhorn::{SinkhornSettings, check_range, solve_dual};
-use finish::{VIOLATORS_PER_CANDIDATE, auction_potentials, finish};
+use finish::{Pass, auction_potentials, finish};
 use settings::checked_diameter_sq;
 pub use settings::{ExactSettings, MAX_DIAMETER_SQ};
 use sparse::SparseAssignment;
@@ -118,32 +124,27 @@ pub(crate) fn solve_from(
     let mut solved = match &previous {
         Some(p) => {
             // Kept graph and potentials, completed by a check; then the auction
-            // from the kept prices at a small ε, and the same finish as a cold solve.
-            let per_row = VIOLATORS_PER_CANDIDATE * settings.candidates;
-            let warm = phases.time("warm_graph", || {
-                p.start(&x, &y, settings.tolerance, per_row)
-            });
+            // from the kept prices at a small ε, and the same finish as a cold
+            // solve, checking with a margin.
+            let pass = Pass {
+                auction_start: settings.warm_auction_start,
+                check_margin: settings.warm_check_margin,
+            };
+            let warm = phases.time("warm_graph", || p.start(&x, &y, settings, pass, diam2));
             let mut stats = SolveStats {
                 warm_starts: 1,
                 pair_evaluations: warm.pairs,
                 added_pairs: warm.added,
                 ..SolveStats::default()
             };
-            let (edges, v) = warm.assignment.into_parts();
+            // The auction only raises prices (lowers v), so the floors stay valid.
+            let (edges, v, floors) = warm.assignment.into_parts();
             let (v, finished) = phases.time("auction", || {
-                auction_potentials(&edges, v, diam2, settings.warm_auction_start, settings)
+                auction_potentials(&edges, v, diam2, pass.auction_start, settings)
             });
             stats.auction_budget_stops += usize::from(!finished);
-            let lsap = SparseAssignment::new(edges, v);
-            finish(
-                &x,
-                &y,
-                diam2,
-                settings,
-                lsap,
-                stats,
-                settings.warm_auction_start,
-            )
+            let lsap = SparseAssignment::with_floors(edges, v, floors);
+            finish(&x, &y, diam2, settings, lsap, stats, pass)
         }
         None => solve_sorted(&x, &y, diam2, settings),
     };
@@ -300,6 +301,10 @@ pub(crate) fn solve_sorted(
     settings: &ExactSettings,
 ) -> SortedAssignment {
     let Prices { edges, v, stats } = sparse_prices(x, y, diameter_sq, settings);
+    let pass = Pass {
+        auction_start: settings.auction_start,
+        check_margin: 0.0,
+    };
     finish(
         x,
         y,
@@ -307,7 +312,7 @@ pub(crate) fn solve_sorted(
         settings,
         SparseAssignment::new(edges, v),
         stats,
-        settings.auction_start,
+        pass,
     )
 }
 

@@ -43,6 +43,12 @@ pub struct ExactSettings {
     /// First ε of the auctions of a warm-started solve (`crate::warm`), whose
     /// prices start near the optimum, in units of the clouds' squared diameter.
     pub warm_auction_start: f64,
+    /// Margin of a warm-started solve's optimality checks (see `check`), in
+    /// units of the clouds' squared diameter: each checked row also gets its
+    /// pairs within this margin of its potential, so the auctions and
+    /// augmenting paths that follow see the columns it may turn to, and its
+    /// potential may rise by the margin before it needs another check.
+    pub warm_check_margin: f64,
 }
 
 impl Default for ExactSettings {
@@ -66,6 +72,7 @@ impl Default for ExactSettings {
             auction_start: 0.025,
             auction_end: 2.5e-10,
             warm_auction_start: 1e-4,
+            warm_check_margin: 5e-4,
         }
     }
 }
@@ -110,6 +117,13 @@ impl ExactSettings {
                 key: "exact.warm_auction_start",
                 value: self.warm_auction_start,
                 reason: "need warm_auction_start >= auction_end > 0",
+            });
+        }
+        if !(self.warm_check_margin >= 0.0 && self.warm_check_margin.is_finite()) {
+            return Err(OtError::InvalidSetting {
+                key: "exact.warm_check_margin",
+                value: self.warm_check_margin,
+                reason: "must be finite and non-negative",
             });
         }
         self.warm_start.validate()

@@ -7,7 +7,9 @@
 //! good warm start leaves within reach), after which the potentials of the
 //! scanned columns are shifted so feasibility and tightness still hold.
 //! Edges can be added at any time: an edge that violates feasibility lowers
-//! its row's potential and frees that row for another search.
+//! its row's potential and frees that row for another search. Column
+//! potentials only fall, so each row's floor from the last optimality check
+//! (see `check`) stays a valid bound.
 
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
@@ -52,14 +54,23 @@ pub(crate) struct SparseAssignment {
     dist: Vec<f64>,
     pred: Vec<u32>,
     scanned: Vec<bool>,
-    /// Rows whose potential rose since the last [`Self::take_raised`].
-    raised: Vec<bool>,
+    /// Per row, a lower bound on `c_ij − v_j` over the pairs outside the graph
+    /// (`−∞` before its first check; see `check`).
+    floors: Vec<f64>,
 }
 
 impl SparseAssignment {
     /// Starts from candidate edges (per row) and column potentials `v`; rows take `u_i = min_j c_ij − v_j`
     /// and are greedily matched along a tight edge when its column is free.
+    /// Every row needs a check.
     pub fn new(edges: Vec<Vec<(u32, f64)>>, v: Vec<f64>) -> Self {
+        let n = edges.len();
+        Self::with_floors(edges, v, vec![f64::NEG_INFINITY; n])
+    }
+
+    /// [`Self::new`] keeping the rows' floors from an earlier check on the
+    /// same edges (or fewer), valid if `v` is at most the potentials they were found with.
+    pub fn with_floors(edges: Vec<Vec<(u32, f64)>>, v: Vec<f64>, floors: Vec<f64>) -> Self {
         let n = edges.len();
         let mut s = Self {
             u: vec![f64::INFINITY; n],
@@ -69,7 +80,7 @@ impl SparseAssignment {
             dist: vec![f64::INFINITY; n],
             pred: vec![NONE; n],
             scanned: vec![false; n],
-            raised: vec![true; n],
+            floors,
             edges,
         };
         for i in 0..n {
@@ -88,9 +99,9 @@ impl SparseAssignment {
         s
     }
 
-    /// The candidate edges and the column potentials.
-    pub fn into_parts(self) -> (Vec<Vec<(u32, f64)>>, Vec<f64>) {
-        (self.edges, self.v)
+    /// The candidate edges, the column potentials and the rows' floors (see [`Self::with_floors`]).
+    pub fn into_parts(self) -> (Edges, Vec<f64>, Vec<f64>) {
+        (self.edges, self.v, self.floors)
     }
 
     /// The candidate edges and both potentials (the matching is [`Self::permutation`]).
@@ -103,10 +114,16 @@ impl SparseAssignment {
         self.edges.iter().map(Vec::len).sum()
     }
 
-    /// Adds edges `(row, col, cost)`; rows whose potential must drop to stay feasible are unmatched.
-    pub fn add_edges(&mut self, added: &[(u32, u32, f64)]) {
+    /// Adds edges `(row, col, cost)` not already in the graph and returns how
+    /// many it added; rows whose potential must drop to stay feasible are unmatched.
+    pub fn add_edges(&mut self, added: &[(u32, u32, f64)]) -> usize {
+        let mut count = 0;
         for &(i, j, c) in added {
             let (i, ju) = (i as usize, j as usize);
+            if self.edges[i].iter().any(|e| e.0 == j) {
+                continue;
+            }
+            count += 1;
             self.edges[i].push((j, c));
             let red = c - self.v[ju];
             if red < self.u[i] {
@@ -118,15 +135,25 @@ impl SparseAssignment {
                 }
             }
         }
+        count
     }
 
-    /// Which rows had their potential raised since the last call (all rows at first), and clears the flags.
+    /// Which rows need an optimality check: those whose potential is above
+    /// their floor (all rows at first).
     ///
-    /// Only these rows can have gained a violated pair: augmentations only
-    /// raise row potentials and lower column potentials, and added edges only
-    /// lower row potentials, so `c_ij − u_i − v_j` can only have dropped where `u_i` rose.
-    pub fn take_raised(&mut self) -> Vec<bool> {
-        std::mem::replace(&mut self.raised, vec![false; self.u.len()])
+    /// The others cannot have a violated pair: the graph's edges are kept
+    /// feasible, and every other pair has `c_ij − v_j ≥ floor_i ≥ u_i`.
+    pub fn unsettled_rows(&self) -> Vec<bool> {
+        self.u
+            .iter()
+            .zip(&self.floors)
+            .map(|(u, f)| u > f)
+            .collect()
+    }
+
+    /// The potentials `u, v` and the rows' floors, for a check to update.
+    pub fn check_view(&mut self) -> (&[f64], &[f64], &mut [f64]) {
+        (&self.u, &self.v, &mut self.floors)
     }
 
     /// Rows without a column.
@@ -165,14 +192,12 @@ impl SparseAssignment {
         if let Some((sink, dmin)) = found {
             // Shift potentials: settled columns and their rows move by dmin − d_j.
             self.u[i0] += dmin;
-            self.raised[i0] = true;
             for &j in &scanned {
                 let j = j as usize;
                 if j != sink {
                     let shift = dmin - self.dist[j];
                     let i = self.row_of[j] as usize;
                     self.u[i] += shift;
-                    self.raised[i] = true;
                     self.v[j] -= shift;
                 }
             }

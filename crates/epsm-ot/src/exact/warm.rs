@@ -6,18 +6,22 @@
 //! target's clustering. The next solve builds its candidate graph from the
 //! kept targets of each source point (same input index, costs of the new
 //! points) plus its previous partner, starts the sparse assignment from the
-//! kept `v` (row potentials `u_i = min_j c_ij − v_j` over the graph) and
-//! goes straight to the augment-and-check loop of `exact`: the entropic warm
-//! start, the candidate search and the auction are skipped. The previous
-//! permutation is a perfect matching of the graph, so the auction that
-//! re-prices many free rows terminates. Optimality is proven by the same
-//! check over all pairs, whatever the kept state was.
+//! kept `v` (row potentials `u_i = min_j c_ij − v_j` over the graph), and
+//! completes the graph by one check of all rows with the margin
+//! `exact.warm_check_margin`: each row gets its pairs below or within the
+//! margin of its true minimum, so the auction that follows (from the kept
+//! prices, at the small first ε `exact.warm_auction_start`) and the
+//! augmenting paths see the columns each row may turn to, and the rows'
+//! floors (see `check`) spare most of them the next check. The entropic warm
+//! start and the candidate search are skipped. The previous permutation is a
+//! perfect matching of the graph, so the auction terminates. Optimality is
+//! proven by the same check over all pairs, whatever the kept state was.
 
 use rayon::prelude::*;
 
-use super::SortedAssignment;
-use super::check::violations;
+use super::finish::{Pass, check_rows};
 use super::sparse::SparseAssignment;
+use super::{ExactSettings, SortedAssignment};
 use crate::clusters::Clustered;
 use crate::cost::sq_dist_f64;
 
@@ -119,9 +123,17 @@ impl ExactState {
     }
 
     /// The sparse assignment the next solve starts from, on the clusterings `x` and `y`:
-    /// the kept graph, with each row's `per_row` most violated pairs against
-    /// the kept `v` added (so its `u_i` is the row minimum over all pairs).
-    pub fn start(&self, x: &Clustered, y: &Clustered, tolerance: f64, per_row: usize) -> WarmGraph {
+    /// the kept graph, with each row's pairs of smallest reduced cost against
+    /// the kept `v` added by a check with `pass`'s margin (so its `u_i` is the
+    /// row minimum over all pairs, and its floor above it by the margin).
+    pub fn start(
+        &self,
+        x: &Clustered,
+        y: &Clustered,
+        settings: &ExactSettings,
+        pass: Pass,
+        diameter_sq: f64,
+    ) -> WarmGraph {
         let n = x.cloud.len();
         let mut sorted_target = vec![0u32; n];
         for (k, &j) in y.order.iter().enumerate() {
@@ -150,21 +162,12 @@ impl ExactState {
             .collect();
         let pairs: u64 = edges.iter().map(|r| r.len() as u64).sum();
         let mut assignment = SparseAssignment::new(edges, v);
-        let rows = assignment.take_raised();
-        let (found, checked) = violations(
-            x,
-            y,
-            &assignment.u,
-            &assignment.v,
-            tolerance,
-            per_row,
-            &rows,
-        );
-        assignment.add_edges(&found);
+        let check = check_rows(x, y, settings, &mut assignment, pass, diameter_sq);
+        let added = assignment.add_edges(&check.found);
         WarmGraph {
             assignment,
-            pairs: pairs + checked,
-            added: found.len(),
+            pairs: pairs + check.checked,
+            added,
         }
     }
 }

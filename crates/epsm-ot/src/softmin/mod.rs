@@ -20,7 +20,7 @@ mod exp;
 
 use std::ops::Range;
 
-use crate::cpu::{Simd, simd};
+use crate::cpu::{Simd, active_simd};
 use crate::points::{DIM, Point};
 use body::{Scratch, block_sums, gathered_sum, push_range_moments};
 pub(crate) use exp::exp_nonpositive;
@@ -136,7 +136,7 @@ pub(crate) fn stream_blocks(
     stream::<false>(x, y, lw, g, inv_eps, ranges, Sink::Blocks(sums))
 }
 
-/// Picks the widest SIMD body the running CPU supports.
+/// Runs the SIMD body the kernels use ([`active_simd`]).
 fn stream<const MOMENTS: bool>(
     x: &Point,
     y: &[Vec<f32>; DIM],
@@ -146,19 +146,38 @@ fn stream<const MOMENTS: bool>(
     ranges: &[Range<usize>],
     sink: Sink,
 ) -> u64 {
-    match simd() {
+    stream_with::<MOMENTS>(active_simd(), x, y, lw, g, inv_eps, ranges, sink)
+}
+
+/// Runs the body compiled for `simd`, or the portable one if the running CPU lacks it.
+#[allow(clippy::too_many_arguments)]
+fn stream_with<const MOMENTS: bool>(
+    simd: Simd,
+    x: &Point,
+    y: &[Vec<f32>; DIM],
+    lw: &[f32],
+    g: &[f32],
+    inv_eps: f32,
+    ranges: &[Range<usize>],
+    sink: Sink,
+) -> u64 {
+    match simd {
         #[cfg(target_arch = "x86_64")]
         #[allow(unsafe_code)]
         // SAFETY: `stream_avx512` only requires the four AVX-512 subsets it is
-        // compiled for, which `simd` detected on the running CPU; it has no other
+        // compiled for, which the guard detected on the running CPU; it has no other
         // precondition (it is the same safe code compiled for 512-bit registers).
-        Simd::Avx512 => unsafe { stream_avx512::<MOMENTS>(x, y, lw, g, inv_eps, ranges, sink) },
+        Simd::Avx512 if simd.available() => unsafe {
+            stream_avx512::<MOMENTS>(x, y, lw, g, inv_eps, ranges, sink)
+        },
         #[cfg(target_arch = "x86_64")]
         #[allow(unsafe_code)]
-        // SAFETY: `stream_avx2` only requires AVX2 and FMA, which `simd` detected on
-        // the running CPU; it has no other precondition (it is the same safe code
+        // SAFETY: `stream_avx2` only requires AVX2 and FMA, which the guard detected
+        // on the running CPU; it has no other precondition (it is the same safe code
         // compiled for 256-bit registers).
-        Simd::Avx2 => unsafe { stream_avx2::<MOMENTS>(x, y, lw, g, inv_eps, ranges, sink) },
+        Simd::Avx2 if simd.available() => unsafe {
+            stream_avx2::<MOMENTS>(x, y, lw, g, inv_eps, ranges, sink)
+        },
         _ => stream_portable::<MOMENTS>(x, y, lw, g, inv_eps, ranges, sink),
     }
 }
@@ -240,12 +259,15 @@ mod tests {
     }
 
     #[test]
-    fn dispatched_simd_row_equals_portable_row() {
+    fn every_simd_row_equals_the_portable_row() {
         // The SIMD paths run the portable code in wider registers with no
         // reassociation and no FMA contraction, so they agree to rounding (in
-        // practice bit for bit); the stated tolerance is 1e-6 relative.
+        // practice bit for bit); the stated tolerance is 1e-6 relative. Every
+        // body the CPU has runs (the portable one on any CPU).
         let mut rng = crate::synthetic::Rng::new(7);
-        for case in 0..20 {
+        let bodies = Simd::supported();
+        for case in 0..20 * bodies.len() {
+            let body = bodies[case % bodies.len()];
             let n = 1 + rng.index(700);
             let y: [Vec<f32>; DIM] =
                 std::array::from_fn(|_| (0..n).map(|_| rng.uniform()).collect());
@@ -256,7 +278,8 @@ mod tests {
             let split = rng.index(n + 1);
             let ranges = [0..split, split..n];
             let (mut a, mut b) = (RowSum::new(), RowSum::new());
-            let pa = stream_row::<true>(&x, &y, &lw, &g, inv_eps, &ranges, &mut a);
+            let pa =
+                stream_with::<true>(body, &x, &y, &lw, &g, inv_eps, &ranges, Sink::Row(&mut a));
             let pb = stream_portable::<true>(&x, &y, &lw, &g, inv_eps, &ranges, Sink::Row(&mut b));
             assert_eq!(pa, pb);
             let (la, lb) = (a.log_sum(), b.log_sum());

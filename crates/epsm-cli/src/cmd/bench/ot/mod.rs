@@ -23,6 +23,7 @@
 //! | `cold_starts`      | entropic warm starts replaced by zero potentials on all pairs: clouds beyond the warm start's range or non-finite potentials (exact) |
 //! | `peak_rss_mb`      | peak resident memory of the process (VmHWM)                 |
 //! | `threads`          | rayon threads                                               |
+//! | `simd`             | instruction set of the OT kernels: `avx512`, `avx2` or `portable` (`--simd`, default the widest the CPU has) |
 //! | `phases`           | seconds per named phase of the solve (see below)            |
 //!
 //! Phases: `cluster` (grid clustering of both clouds); Sinkhorn: `coarse`
@@ -60,6 +61,27 @@ pub enum OtSolver {
     Sliced,
 }
 
+/// An instruction set of the OT kernels (`epsm_ot::Simd`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum OtSimd {
+    /// AVX-512 F/BW/DQ/VL (16 lanes).
+    Avx512,
+    /// AVX2 + FMA (8 lanes).
+    Avx2,
+    /// Baseline x86-64 (SSE2).
+    Portable,
+}
+
+impl From<OtSimd> for epsm_ot::Simd {
+    fn from(s: OtSimd) -> Self {
+        match s {
+            OtSimd::Avx512 => Self::Avx512,
+            OtSimd::Avx2 => Self::Avx2,
+            OtSimd::Portable => Self::Portable,
+        }
+    }
+}
+
 /// Arguments of `epsm bench ot`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct OtBenchArgs {
@@ -81,6 +103,10 @@ pub struct OtBenchArgs {
     /// Sinkhorn ratio between successive blurs of the ε-scaling schedule.
     #[arg(long, default_value_t = 0.9)]
     pub scaling: f64,
+    /// Force the OT kernels' instruction set (default: the widest the CPU has);
+    /// an error when the CPU lacks it.
+    #[arg(long, value_enum)]
+    pub simd: Option<OtSimd>,
     /// Cold against warm-started matching along a rendered sequence (see `bench_ot::sequence`).
     #[command(flatten)]
     pub sequence: sequence::SequenceArgs,
@@ -105,6 +131,7 @@ struct Report {
     cold_starts: usize,
     peak_rss_mb: Option<f64>,
     threads: usize,
+    simd: &'static str,
     phases: BTreeMap<&'static str, f64>,
 }
 
@@ -125,6 +152,7 @@ pub fn run(args: &OtBenchArgs) -> anyhow::Result<()> {
         }),
         OtSolver::Sliced => Matcher::sliced(),
     };
+    epsm_ot::force_simd(args.simd.map(Into::into)).context("--simd")?;
     if let Some(steps) = args.sequence.sequence {
         return sequence::run(&args.sequence, steps, args.n, &matcher, args.json);
     }
@@ -157,13 +185,14 @@ pub fn run(args: &OtBenchArgs) -> anyhow::Result<()> {
         cold_starts: result.stats.cold_starts,
         peak_rss_mb: crate::cmd::peak_rss_mb(),
         threads: rayon::current_num_threads(),
+        simd: epsm_ot::active_simd().name(),
         phases: result.stats.phases.iter().collect(),
     };
     if args.json {
         println!("{}", serde_json::to_string(&report)?);
     } else {
         println!(
-            "ot {} n={} {:.3}s loss={:.6} cost={:.6} marginal_error={} pairs/s={} cold_starts={} peak={} MB",
+            "ot {} n={} {:.3}s loss={:.6} cost={:.6} marginal_error={} pairs/s={} cold_starts={} simd={} peak={} MB",
             report.solver,
             report.n,
             report.seconds,
@@ -176,6 +205,7 @@ pub fn run(args: &OtBenchArgs) -> anyhow::Result<()> {
                 .pair_evals_per_s
                 .map_or("-".into(), |p| format!("{p:.3e}")),
             report.cold_starts,
+            report.simd,
             report.peak_rss_mb.map_or("?".into(), |m| format!("{m:.1}")),
         );
     }
