@@ -9,8 +9,9 @@
 //! matches a target whose outliers (at its own resolution, before the box
 //! filter to the match resolution) are replaced by their neighbours' median
 //! ([`despeckle`]); L2, the judge and the image RMSE compare the target as
-//! given. A feature two pixels wide keeps a neighbour within
-//! [`OUTLIER_RATIO`] of its brightness and is not touched.
+//! given. A feature two pixels wide is touched only where one of its pixels
+//! is more than [`OUTLIER_RATIO`] times as bright as the other and as every
+//! other neighbour.
 
 use epsm_render::Image;
 use glam::Vec3;
