@@ -33,6 +33,8 @@ use super::box_test::BoxTest;
 use super::flat::{FlatBvh, FlatHit};
 use super::node::TraceRay;
 use super::triangle::PackedTriangle;
+#[cfg(target_arch = "x86_64")]
+use super::wide::Blas16;
 use crate::scene::Mesh;
 
 /// An obvhs CWBVH over packed triangles, the triangles and their ids in leaf
@@ -85,9 +87,13 @@ impl SlotTriangles {
 /// traversal layout of module `flat`.
 #[derive(Clone, Debug)]
 pub(crate) struct Blas {
-    bvh: FlatBvh,
+    /// The BVH; triangle ids are the mesh's triangle indices.
+    pub(super) bvh: FlatBvh,
     /// Bounds of the hittable triangles.
     pub bounds: Aabb,
+    /// The tables of the sixteen-ray walks (module `wide`).
+    #[cfg(target_arch = "x86_64")]
+    pub(super) wide: Blas16,
 }
 
 impl Blas {
@@ -99,8 +105,11 @@ impl Blas {
             (0..mesh.len() as u32).map(|tri| (tri, mesh.triangle(tri).map(Vec3A::from))),
             BvhBuildParams::very_fast_build(),
         )?;
+        let bvh = FlatBvh::new(&built);
         Some(Self {
-            bvh: FlatBvh::new(&built),
+            #[cfg(target_arch = "x86_64")]
+            wide: Blas16::new(&bvh),
+            bvh,
             bounds: built.bounds,
         })
     }
@@ -112,7 +121,11 @@ impl Blas {
 
     /// Approximate heap size in bytes.
     pub fn bytes(&self) -> usize {
-        self.bvh.bytes()
+        #[cfg(target_arch = "x86_64")]
+        let wide = self.wide.bytes();
+        #[cfg(not(target_arch = "x86_64"))]
+        let wide = 0;
+        wide + self.bvh.bytes()
     }
 
     /// Traces the object-space `ray`, box tests by `boxes` (see

@@ -26,7 +26,8 @@
 //! [`Accel::surface_points`], module `batch`) are traced sixteen at a time
 //! where the CPU has AVX-512 or AVX2 (module `wide`: the static BVH walked as a
 //! packet from tables built beside it, the listed spheres in `f64` lanes,
-//! instances lane by lane by the scalar code), with the scalar walks'
+//! a few instances one after another with their bottom-level BVHs walked as
+//! packets, many lane by lane by the scalar code), with the scalar walks'
 //! answers (but for ties, module `wide`).
 //!
 //! Moving an object ([`Accel::update_instance`]) re-reads its transform and

@@ -17,10 +17,12 @@
 //! lane by lane by the scalar walk. A sphere then wins a lane whose static
 //! hit is no closer (`t_sphere ≤ t_triangle`: the scalar rule that a listed
 //! sphere wins a tie). Instances behind the top level (dynamic objects,
-//! instanced large meshes, scenes with more than two exact spheres) are
-//! walked per lane by the scalar code itself (`Accel::trace_instances`,
-//! module `lanes`), starting from the lane's best hit so far, as the scalar
-//! trace does after the static BVH. Occlusion runs the same steps, each
+//! instanced large meshes, scenes with more than two exact spheres) come
+//! next, each lane starting from its best hit so far, as the scalar trace
+//! does after the static BVH: up to eight one after another, a mesh's
+//! bottom-level BVH walked as a packet in the mesh's object space (module
+//! `instances`); more per lane by the scalar code itself
+//! (`Accel::trace_instances`, module `lanes`). Occlusion runs the same steps, each
 //! lane leaving at its first hit. Shading points come from tables of the
 //! static triangles and from the listed spheres' placements in lanes
 //! (module `points`), others per lane from the scalar code.
@@ -30,10 +32,10 @@
 //! every hit the scalar walk finds, with the same `t`, barycentrics and
 //! ids. The one difference: two primitives hit at the same `t` (to within
 //! the rounding of the range tests against the `t_max` a walk carries), in
-//! different nodes of the static BVH, as for a ray through a vertex shared
-//! by triangles in two leaves. The scalar walk keeps the one its visiting
-//! order meets last, and the packet visits nodes in its own order, so it
-//! may report the other. Within a node the scalar packet test's rule is
+//! different nodes of a BVH, as for a ray through a vertex shared by
+//! triangles in two leaves, or in two instances. The scalar walk keeps
+//! the one its visiting order meets last, and the packet visits nodes (and
+//! instances) in its own order, so it may report the other. Within a node the scalar packet test's rule is
 //! kept (so a BVH of one node, as `scenes/cornell-box.toml`'s, has no such
 //! difference); occlusion has none (any hit will do), nor has a sphere
 //! tying with a triangle (the sphere wins both ways). The unit tests count
@@ -43,12 +45,14 @@
 //!
 //! The tables (module `tree`: 64 bytes per static triangle and 704 per
 //! node with up to sixteen leaf triangles; module `points`: 128 bytes per
-//! static triangle) are built with the static BVH, on x86-64 only.
+//! static triangle) are built with the static BVH (module `tree`'s also
+//! with each bottom-level BVH), on x86-64 only.
 //!
 //! No parameters.
 
 mod affine;
 mod closest;
+mod instances;
 mod lanes;
 mod leaves;
 mod points;
@@ -107,6 +111,27 @@ impl World16 {
     }
 }
 
+/// A bottom-level BVH's tables for sixteen rays at a time.
+#[derive(Clone, Debug)]
+pub(crate) struct Blas16 {
+    /// The packet walk's layout of the BVH.
+    tree: Tree16,
+}
+
+impl Blas16 {
+    /// The tables of the bottom-level BVH `bvh`.
+    pub fn new(bvh: &FlatBvh) -> Self {
+        Self {
+            tree: Tree16::new(bvh),
+        }
+    }
+
+    /// Approximate heap size in bytes.
+    pub fn bytes(&self) -> usize {
+        self.tree.bytes()
+    }
+}
+
 impl Accel {
     /// Lane `i` in `active`: exactly `self.closest_hit` of lane `i`'s ray
     /// (but for ties, module docs); other lanes: `found` unset.
@@ -137,15 +162,7 @@ impl Accel {
         };
         let mut best = Closest16::none(&lanes);
         let (zero, none) = (U32x16::splat(k, 0), U32x16::splat(k, NO_WORLD_INDEX));
-        let mut hits = Hits16 {
-            found: Mask16::NONE,
-            object: zero,
-            triangle: zero,
-            b1: best.b1,
-            b2: best.b2,
-            t: best.t,
-            world_index: none,
-        };
+        let mut hits = Hits16::none(k, rays);
         if let Some(world) = self.world.as_deref() {
             let w = &world.wide;
             w.tree
@@ -173,7 +190,9 @@ impl Accel {
                 world_index: U32x16::select(wins, none, hits.world_index),
             };
         }
-        if !self.tlas.slots.is_empty() && active.any() {
+        if !self.tlas.slots.is_empty() && active.any() && self.instances_in_lanes() {
+            self.instances16::<false, _>(k, rays, active, &mut hits);
+        } else if !self.tlas.slots.is_empty() && active.any() {
             let (rays, best) = (lanes::PlainRays::new(rays), hits.to_lanes());
             let lanes = std::array::from_fn(|i| (active.test(i), rays.lane(i), best[i]));
             hits = Hits16::from_lanes(k, &self.instances_per_lane::<false, _>(k, &lanes));
@@ -212,7 +231,11 @@ impl Accel {
             occluded = occluded | best.found;
         }
         let rest = active.and_not(occluded);
-        if !self.tlas.slots.is_empty() && rest.any() {
+        if !self.tlas.slots.is_empty() && rest.any() && self.instances_in_lanes() {
+            let mut hits = Hits16::none(k, rays);
+            self.instances16::<true, _>(k, rays, rest, &mut hits);
+            occluded = occluded | hits.found;
+        } else if !self.tlas.slots.is_empty() && rest.any() {
             let rays = lanes::PlainRays::new(rays);
             let lanes = std::array::from_fn(|i| (rest.test(i), rays.lane(i), None));
             let found = self.instances_per_lane::<true, _>(k, &lanes);

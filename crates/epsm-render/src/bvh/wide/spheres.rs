@@ -96,17 +96,17 @@ impl Accel {
 /// A sphere's hits: in lanes of `found`, `t` (rounded to `f32`) and the
 /// octahedral coordinates (zero with `ANY`).
 #[derive(Clone, Copy, Debug)]
-struct Hits<B: Lanes> {
-    found: Mask16,
-    t: F32x16<B>,
-    b1: F32x16<B>,
-    b2: F32x16<B>,
+pub(super) struct Hits<B: Lanes> {
+    pub found: Mask16,
+    pub t: F32x16<B>,
+    pub b1: F32x16<B>,
+    pub b2: F32x16<B>,
 }
 
 /// The hits of the rays of `lanes` (each ending at `t_max`) on the sphere
 /// placed by `placement`, in `f64` lanes; `None` without any.
 #[inline(always)]
-fn in_lanes<const ANY: bool, B: Lanes>(
+pub(super) fn in_lanes<const ANY: bool, B: Lanes>(
     k: B,
     placement: &Placement,
     rays: &RayLanes<B>,
@@ -135,7 +135,7 @@ fn in_lanes<const ANY: bool, B: Lanes>(
 
 /// [`MissTest::misses`] per lane: the lanes whose line surely misses.
 #[inline(always)]
-fn misses<B: Lanes>(test: &MissTest, rays: &RayLanes<B>) -> Mask16 {
+pub(super) fn misses<B: Lanes>(test: &MissTest, rays: &RayLanes<B>) -> Mask16 {
     let k = rays.k;
     let center = Vec3x16::splat(k, test.center.into());
     let oc = center - rays.origin;

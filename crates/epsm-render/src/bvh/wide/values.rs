@@ -4,6 +4,7 @@
 
 use glam::Vec2;
 
+use crate::bvh::NO_WORLD_INDEX;
 use crate::frame::Frame;
 use crate::hit::{Hit, SurfacePoint, TexCoords};
 use crate::simd::{F32x16, LANES, Lanes, Mask16, U32x16, Vec3x16};
@@ -109,6 +110,21 @@ pub(crate) struct Hits16<B: Lanes> {
 }
 
 impl<B: Lanes> Hits16<B> {
+    /// No hit in any lane, each lane's `t` its ray's `t_max`.
+    #[inline(always)]
+    pub fn none(k: B, rays: &Rays16<B>) -> Self {
+        let (zero, zero_f) = (U32x16::splat(k, 0), F32x16::splat(k, 0.0));
+        Self {
+            found: Mask16::NONE,
+            object: zero,
+            triangle: zero,
+            b1: zero_f,
+            b2: zero_f,
+            t: rays.t_max,
+            world_index: U32x16::splat(k, NO_WORLD_INDEX),
+        }
+    }
+
     #[cfg(test)]
     /// Lane `lane` as a [`Hit`] (`None` outside `found`).
     #[inline(always)]

@@ -10,6 +10,7 @@ use std::sync::Arc;
 
 use glam::{DAffine3, DQuat, DVec3, Vec2, Vec3};
 
+use super::super::instances::LINEAR_INSTANCES;
 use super::{Tally, compare};
 use crate::bvh::Accel;
 use crate::bvh::test_support::push_soup_triangle;
@@ -119,7 +120,18 @@ fn scene(rng: &mut Rng, case: usize) -> (Vec<Object>, Vec<ObjectId>) {
         let at = placement(rng, scale, case.is_multiple_of(2));
         objects.push(object(Mesh::default(), at, Surface::Sphere));
     }
-    let dynamic = if case % 5 == 2 { vec![2] } else { vec![] };
+    let mut dynamic = if case % 5 == 2 { vec![2] } else { vec![] };
+    if case % 8 == 7 {
+        // More instances than the packet walks take: the scalar top-level
+        // walk per lane.
+        for i in 0..LINEAR_INSTANCES {
+            let mesh = soup(rng, 20, i % 3, false);
+            objects.push(object(mesh, placement(rng, scale, true), Surface::Mesh));
+        }
+        dynamic = (1..objects.len() as ObjectId)
+            .filter(|&id| objects[id as usize].surface == Surface::Mesh)
+            .collect();
+    }
     (objects, dynamic)
 }
 
@@ -166,9 +178,14 @@ fn random_scenes_match_the_scalar_walks() {
     fn on<B: Lanes>(k: B) {
         let mut rng = Rng::new(29);
         let mut total = Tally::default();
+        // Scenes whose instances are walked in lanes, and per lane.
+        let mut instance_walks = [0; 2];
         for case in 0..24 {
             let (objects, dynamic) = scene(&mut rng, case);
             let accel = Accel::build_with_dynamic(&objects, &dynamic);
+            if !accel.tlas.slots.is_empty() {
+                instance_walks[usize::from(!accel.instances_in_lanes())] += 1;
+            }
             let scale = [1.0, 1e-3, 1e3][case % 3];
             let mut tally = Tally::default();
             for p in 0..120 {
@@ -206,7 +223,8 @@ fn random_scenes_match_the_scalar_walks() {
                 *sum += add;
             }
         }
-        eprintln!("{total:?}");
+        eprintln!("{total:?}, instance walks in lanes / per lane {instance_walks:?}");
+        assert!(instance_walks.iter().all(|&n| n > 0), "{instance_walks:?}");
         assert!(total.ties * 1000 <= total.rays, "{total:?}");
         assert!(
             total.sphere_hits > 1000 && total.occluded > 10_000,
