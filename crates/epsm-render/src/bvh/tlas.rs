@@ -123,6 +123,9 @@ pub(crate) struct Tlas {
     pub bvh: WideBvh,
     /// Instance index of each leaf slot.
     pub slots: Vec<u32>,
+    /// The padded world box of each leaf slot's instance (the top-level
+    /// BVH's leaf boxes).
+    pub boxes: Vec<Aabb>,
 }
 
 impl Tlas {
@@ -152,16 +155,22 @@ impl Tlas {
             .iter()
             .map(|&p| placed[p as usize])
             .collect();
+        let slot_boxes = bvh
+            .primitive_indices
+            .iter()
+            .map(|&p| boxes[p as usize])
+            .collect();
         Self {
             bvh: WideBvh::new(&bvh, |slot| {
                 boxes[bvh.primitive_indices[slot as usize] as usize]
             }),
             slots,
+            boxes: slot_boxes,
         }
     }
 
     /// Approximate heap size in bytes.
     pub fn bytes(&self) -> usize {
-        self.bvh.bytes() + self.slots.len() * 4
+        self.bvh.bytes() + self.slots.len() * 4 + self.boxes.len() * size_of::<Aabb>()
     }
 }

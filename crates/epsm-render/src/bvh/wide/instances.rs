@@ -3,7 +3,9 @@
 //! instanced large meshes, exact spheres beyond the listed two).
 //!
 //! Model: the instances are taken one after another in the top level's
-//! slot order, each against every lane still walking. A mesh instance maps
+//! slot order, each against the lanes still walking that enter its padded
+//! world box (the top level's leaf box, by the scalar walk's box test at
+//! the lane's best `t` so far). A mesh instance maps
 //! the lanes' world-space rays to its object space by its cached `f32`
 //! `object_from_world` (glam's `transform_point3a`/`transform_vector3a`,
 //! term for term, module `affine`), each lane ending at its best hit so far,
@@ -16,14 +18,15 @@
 //! it goes, and keeps the hit its order meets last within the range tests'
 //! rounding; here the slot order decides (module `wide`).
 //!
-//! Past [`LINEAR_INSTANCES`] instances the top level's BVH culls more than
-//! the packet walks gain, and the scalar walk runs per lane (module
+//! Past [`LINEAR_INSTANCES`] instances, a box test per instance costs more
+//! than the top level's BVH, and the scalar walk runs per lane (module
 //! `lanes`).
 //!
 //! No parameters.
 
 use super::closest::Closest16;
 use super::rays::RayLanes;
+use super::tree::enter_box;
 use super::walk::Policy;
 use super::{Hits16, Rays16, affine, spheres};
 use crate::bvh::tlas::Traced;
@@ -32,7 +35,7 @@ use crate::simd::{F32x16, Lanes, Mask16, U32x16};
 
 /// The most instances tested one after another for sixteen rays; beyond,
 /// the scalar top-level walk runs per lane.
-pub(super) const LINEAR_INSTANCES: usize = 8;
+pub(super) const LINEAR_INSTANCES: usize = 64;
 
 impl Accel {
     /// Whether the instances are walked sixteen rays at a time
@@ -59,7 +62,7 @@ impl Accel {
             || {
                 let world = RayLanes::new(k, rays);
                 let mut todo = lanes;
-                for &slot in &self.tlas.slots {
+                for (&slot, bounds) in self.tlas.slots.iter().zip(&self.tlas.boxes) {
                     if ANY && !todo.any() {
                         return;
                     }
@@ -67,6 +70,11 @@ impl Accel {
                     let Some(placement) = &instance.placement else {
                         continue;
                     };
+                    let (lo, hi) = (bounds.min.to_array(), bounds.max.to_array());
+                    let entering = todo & enter_box(&world, lo, hi, hits.t).lanes;
+                    if !entering.any() {
+                        continue;
+                    }
                     let (found, t, b1, b2, triangle) = match instance.traced {
                         Traced::Blas(blas) => {
                             let blas = &self.blases[blas as usize];
@@ -84,14 +92,15 @@ impl Accel {
                             blas.wide.tree.walk::<ANY, _>(
                                 &blas.bvh,
                                 &local,
-                                todo,
+                                entering,
                                 &mut best,
                                 Policy::MEASURED,
                             );
                             (best.found, best.t, best.b1, best.b2, best.id)
                         }
                         Traced::Sphere => {
-                            let tested = todo.and_not(spheres::misses(&placement.sphere, &world));
+                            let tested =
+                                entering.and_not(spheres::misses(&placement.sphere, &world));
                             if !tested.any() {
                                 continue;
                             }

@@ -19,7 +19,7 @@
 //! sphere wins a tie). Instances behind the top level (dynamic objects,
 //! instanced large meshes, scenes with more than two exact spheres) come
 //! next, each lane starting from its best hit so far, as the scalar trace
-//! does after the static BVH: up to eight one after another, a mesh's
+//! does after the static BVH: up to 64 one after another, a mesh's
 //! bottom-level BVH walked as a packet in the mesh's object space (module
 //! `instances`); more per lane by the scalar code itself
 //! (`Accel::trace_instances`, module `lanes`). Occlusion runs the same steps, each

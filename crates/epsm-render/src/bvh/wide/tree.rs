@@ -187,18 +187,33 @@ impl Node16 {
         rays: &RayLanes<B>,
         t_max: F32x16<B>,
     ) -> Entered<B> {
-        let k = rays.k;
         let child = child & 7;
         let [x, y, z] = &self.planes;
-        let (x0, x1) = slab(k, x[0][child], x[1][child], rays.origin.x, rays.inv_dir.x);
-        let (y0, y1) = slab(k, y[0][child], y[1][child], rays.origin.y, rays.inv_dir.y);
-        let (z0, z1) = slab(k, z[0][child], z[1][child], rays.origin.z, rays.inv_dir.z);
-        let t0 = x0.max(y0).max(z0).max(rays.test.t_min);
-        let t1 = (x1.min(y1).min(z1) * F32x16::splat(k, EXIT_SCALE)).min(t_max);
-        Entered {
-            lanes: t0.le(t1),
-            entry: t0,
-        }
+        let lo = [x[0][child], y[0][child], z[0][child]];
+        let hi = [x[1][child], y[1][child], z[1][child]];
+        enter_box(rays, lo, hi, t_max)
+    }
+}
+
+/// The lanes of `rays` (with `t` up to `t_max`) that enter the box from
+/// `lo` to `hi`, and their entry distances: the scalar walk's child box
+/// test per lane.
+#[inline(always)]
+pub(super) fn enter_box<B: Lanes>(
+    rays: &RayLanes<B>,
+    lo: [f32; 3],
+    hi: [f32; 3],
+    t_max: F32x16<B>,
+) -> Entered<B> {
+    let k = rays.k;
+    let (x0, x1) = slab(k, lo[0], hi[0], rays.origin.x, rays.inv_dir.x);
+    let (y0, y1) = slab(k, lo[1], hi[1], rays.origin.y, rays.inv_dir.y);
+    let (z0, z1) = slab(k, lo[2], hi[2], rays.origin.z, rays.inv_dir.z);
+    let t0 = x0.max(y0).max(z0).max(rays.test.t_min);
+    let t1 = (x1.min(y1).min(z1) * F32x16::splat(k, EXIT_SCALE)).min(t_max);
+    Entered {
+        lanes: t0.le(t1),
+        entry: t0,
     }
 }
 
