@@ -101,6 +101,12 @@ pub(crate) fn violations(
                 let p = x.cloud.point(i);
                 let mut row: Vec<Found> = Vec::new();
                 let mut dropped = false;
+                // Once pairs were dropped, only pairs up to the largest kept
+                // reduced cost (`bar`) can still be among the row's `per_row`
+                // smallest; the screen rules out `s ≥ bar − margin` (its `s` is
+                // below the exact `c − u − v − margin`). Skipping the others
+                // leaves the returned pairs and the floor as they were.
+                let (mut bar, mut screen_limit) = (f64::INFINITY, 0.0);
                 for &jb in &list {
                     let cj = &y.clusters[jb as usize];
                     if box_feasible(cj.box_dist_sq(&p), raised[i], max_v[jb as usize]) {
@@ -113,7 +119,7 @@ pub(crate) fn violations(
                         let slack = &mut slack[..block.len()];
                         screened_block(&p, u32s[i], cols, &v32s, block.clone(), slack);
                         for (j, &s) in block.zip(slack.iter()) {
-                            if screen && s >= 0.0 {
+                            if screen && f64::from(s) >= screen_limit {
                                 continue;
                             }
                             let c = sq_dist_f64(&p, &y.cloud.point(j));
@@ -121,16 +127,19 @@ pub(crate) fn violations(
                             // Rounding of c, u and v is not a violation (matters for far-apart clouds).
                             let rounding =
                                 tolerance + 4.0 * f64::EPSILON * (c + u[i].abs() + v[j].abs());
-                            if reduced < margin - rounding {
+                            if reduced < margin - rounding && reduced <= bar {
                                 row.push((reduced, j as u32, c, reduced < -rounding));
                                 if row.len() == 4 * per_row {
                                     dropped |= keep_worst(&mut row, per_row);
+                                    bar = row.iter().map(|e| e.0).fold(f64::NEG_INFINITY, f64::max);
+                                    screen_limit = bar - margin;
                                 }
                             }
                         }
                     }
                 }
                 dropped |= keep_worst(&mut row, per_row);
+                row.sort_unstable_by_key(|e| e.1);
                 let rise = if dropped {
                     row.iter().map(|e| e.0).fold(f64::NEG_INFINITY, f64::max)
                 } else {
