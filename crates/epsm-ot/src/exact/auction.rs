@@ -12,8 +12,8 @@
 //! prices raises nothing and the phase runs out of bids.
 //!
 //! The graph is copied into compressed rows first (contiguous edges per row,
-//! columns and costs in separate arrays), which made each bid about 15 %
-//! cheaper than reading the per-row vectors.
+//! columns and costs in separate arrays), which made the auctions of the
+//! 16384-point blobs pairs 10–20 % faster than reading the per-row vectors.
 //!
 //! The bids run on one thread, in a fixed order: a bulk-synchronous variant
 //! (every free row bidding against the same prices, in parallel, conflicts
