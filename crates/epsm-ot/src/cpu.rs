@@ -1,7 +1,8 @@
 //! Which vector instructions the OT kernels use, for the bodies compiled
 //! three times (plain x86-64, AVX2 + FMA, AVX-512): the soft-min rows
-//! ([`crate::softmin`]) and the per-point block cut
-//! ([`crate::clusters::PointCut`]).
+//! ([`crate::softmin`]), the per-point block cut
+//! ([`crate::clusters::PointCut`]) and the `f32` screen of the exact
+//! solver's optimality check.
 //!
 //! By default the kernels take the widest instruction set the running CPU
 //! has. [`force_simd`] pins one (for benchmarks: `epsm bench ot --simd`);

@@ -10,8 +10,63 @@
 //! The caller gives ε in cost units, scaled with the costs (see `exact`):
 //! a bid raises a price by at least ε, so an ε below the rounding of the
 //! prices raises nothing and the phase runs out of bids.
+//!
+//! The graph is copied into compressed rows first (contiguous edges per row,
+//! columns and costs in separate arrays), which made the auctions of the
+//! 16384-point blobs pairs 10–20 % faster than reading the per-row vectors.
+//!
+//! The bids run on one thread, in a fixed order: a bulk-synchronous variant
+//! (every free row bidding against the same prices, in parallel, conflicts
+//! resolved by the highest offer, so the same result on any number of
+//! threads) took about 30 % more work on the 16384-point blobs pair and was
+//! slower on two shared cores, also when only rounds of over 1024 free rows
+//! ran in parallel.
 
 const NONE: u32 = u32::MAX;
+
+/// The candidate graph in compressed rows: row `i`'s edges are `start[i]..start[i + 1]`.
+struct Rows {
+    start: Vec<usize>,
+    cols: Vec<u32>,
+    costs: Vec<f64>,
+}
+
+impl Rows {
+    fn new(edges: &[Vec<(u32, f64)>]) -> Self {
+        let mut start = Vec::with_capacity(edges.len() + 1);
+        start.push(0);
+        let total = edges.iter().map(Vec::len).sum();
+        let (mut cols, mut costs) = (Vec::with_capacity(total), Vec::with_capacity(total));
+        for row in edges {
+            cols.extend(row.iter().map(|e| e.0));
+            costs.extend(row.iter().map(|e| e.1));
+            start.push(cols.len());
+        }
+        Self { start, cols, costs }
+    }
+
+    /// Row `i`'s bid at prices `q`: its best column `j₁` and the rise of its
+    /// price, the gap to the second-best column plus `eps` (`lone` instead of
+    /// the gap when the row has one edge); column `NONE` when it has no edge.
+    fn bid(&self, i: usize, q: &[f64], eps: f64, lone: f64) -> (u32, f64) {
+        let range = self.start[i]..self.start[i + 1];
+        let (mut j1, mut r1, mut r2) = (NONE, f64::INFINITY, f64::INFINITY);
+        // Best and second-best column, written without branches (selects)
+        // so unpredictable comparisons cost no mispredictions.
+        for (&j, &c) in self.cols[range.clone()].iter().zip(&self.costs[range]) {
+            let r = c + q[j as usize];
+            let better = r < r1;
+            r2 = if better { r1 } else { r2.min(r) };
+            j1 = if better { j } else { j1 };
+            r1 = if better { r } else { r1 };
+        }
+        if j1 == NONE {
+            return (NONE, 0.0);
+        }
+        let gap = if r2.is_finite() { r2 - r1 } else { lone };
+        (j1, gap + eps)
+    }
+}
 
 /// Runs the auction from prices `q`, raising them in place; `false` if a phase ran out
 /// of its bid budget (a price war, or a graph without a perfect matching).
@@ -27,6 +82,7 @@ pub(crate) fn run(
     factor: f64,
 ) -> bool {
     let n = edges.len();
+    let rows = Rows::new(edges);
     let budget = 200 * n + 10_000;
     let mut eps = eps_start.max(eps_end);
     let mut owner = vec![NONE; n];
@@ -36,30 +92,17 @@ pub(crate) fn run(
         let mut bids = 0usize;
         while let Some(i) = queue.pop() {
             bids += 1;
-            if bids > budget {
-                return false;
-            }
-            let (mut j1, mut r1, mut r2) = (NONE, f64::INFINITY, f64::INFINITY);
-            // Best and second-best column, written without branches (selects)
-            // so unpredictable comparisons cost no mispredictions.
-            for &(j, c) in &edges[i as usize] {
-                let r = c + q[j as usize];
-                let better = r < r1;
-                r2 = if better { r1 } else { r2.min(r) };
-                j1 = if better { j } else { j1 };
-                r1 = if better { r } else { r1 };
-            }
-            if j1 == NONE {
-                return false;
-            }
             // A lone edge: any rise keeps the row on it; the first ε scales with the costs.
-            let gap = if r2.is_finite() { r2 - r1 } else { eps_start };
-            q[j1 as usize] += gap + eps;
-            let previous = owner[j1 as usize];
+            let (j, rise) = rows.bid(i as usize, q, eps, eps_start);
+            if bids > budget || j == NONE {
+                return false;
+            }
+            q[j as usize] += rise;
+            let previous = owner[j as usize];
             if previous != NONE {
                 queue.push(previous);
             }
-            owner[j1 as usize] = i;
+            owner[j as usize] = i;
         }
         if eps <= eps_end {
             return true;

@@ -20,6 +20,7 @@ use rayon::prelude::*;
 
 use crate::clusters::{Clustered, fit_potentials, kept_targets};
 use crate::cost::sq_dist_f64;
+use crate::cpu::{Simd, active_simd};
 
 /// A candidate edge `(row, column, cost)`.
 pub(crate) type Edge = (u32, u32, f64);
@@ -65,6 +66,7 @@ pub(crate) fn violations(
     let (u32s, v32s) = (to_f32(&raised), to_f32(v));
     // Potentials beyond the f32 range: no screen, every pair is tested in f64.
     let screen = u32s.iter().chain(&v32s).all(|t| t.is_finite());
+    let simd = active_simd();
     let cols = y.cloud.columns();
     let max_v: Vec<f64> = y
         .clusters
@@ -101,6 +103,12 @@ pub(crate) fn violations(
                 let p = x.cloud.point(i);
                 let mut row: Vec<Found> = Vec::new();
                 let mut dropped = false;
+                // Once pairs were dropped, only pairs up to the largest kept
+                // reduced cost (`bar`) can still be among the row's `per_row`
+                // smallest; the screen rules out `s ≥ bar − margin` (its `s` is
+                // below the exact `c − u − v − margin`). Skipping the others
+                // leaves the returned pairs and the floor as they were.
+                let (mut bar, mut screen_limit) = (f64::INFINITY, 0.0);
                 for &jb in &list {
                     let cj = &y.clusters[jb as usize];
                     if box_feasible(cj.box_dist_sq(&p), raised[i], max_v[jb as usize]) {
@@ -111,9 +119,9 @@ pub(crate) fn violations(
                     for start in range.clone().step_by(SCREEN_BLOCK) {
                         let block = start..(start + SCREEN_BLOCK).min(range.end);
                         let slack = &mut slack[..block.len()];
-                        screened_block(&p, u32s[i], cols, &v32s, block.clone(), slack);
+                        screened_block(simd, &p, u32s[i], cols, &v32s, block.clone(), slack);
                         for (j, &s) in block.zip(slack.iter()) {
-                            if screen && s >= 0.0 {
+                            if screen && f64::from(s) >= screen_limit {
                                 continue;
                             }
                             let c = sq_dist_f64(&p, &y.cloud.point(j));
@@ -121,16 +129,19 @@ pub(crate) fn violations(
                             // Rounding of c, u and v is not a violation (matters for far-apart clouds).
                             let rounding =
                                 tolerance + 4.0 * f64::EPSILON * (c + u[i].abs() + v[j].abs());
-                            if reduced < margin - rounding {
+                            if reduced < margin - rounding && reduced <= bar {
                                 row.push((reduced, j as u32, c, reduced < -rounding));
                                 if row.len() == 4 * per_row {
                                     dropped |= keep_worst(&mut row, per_row);
+                                    bar = row.iter().map(|e| e.0).fold(f64::NEG_INFINITY, f64::max);
+                                    screen_limit = bar - margin;
                                 }
                             }
                         }
                     }
                 }
                 dropped |= keep_worst(&mut row, per_row);
+                row.sort_unstable_by_key(|e| e.1);
                 let rise = if dropped {
                     row.iter().map(|e| e.0).fold(f64::NEG_INFINITY, f64::max)
                 } else {
@@ -201,8 +212,66 @@ fn to_f32(p: &[f64]) -> Vec<f32> {
 /// (plus under 10⁻³⁷ where squares underflow):
 /// `s_j ≥ 0` proves `c − u − v > 0`, not a violation. (With finite `f32`
 /// potentials an infinite cost gives `s_j = NaN`, which the caller tests in `f64`.)
-/// Written as one branch-free loop over SoA columns so it vectorises.
+/// Written as one branch-free loop over SoA columns so it vectorises; the body
+/// is compiled for `simd` (see [`crate::cpu`]), the portable one where the running
+/// CPU lacks it, and every body computes the same operations in the same order.
+#[allow(clippy::too_many_arguments)]
 fn screened_block(
+    simd: Simd,
+    p: &crate::Point,
+    u: f32,
+    cols: &[Vec<f32>; crate::DIM],
+    v: &[f32],
+    block: std::ops::Range<usize>,
+    out: &mut [f32],
+) {
+    match simd {
+        #[cfg(target_arch = "x86_64")]
+        #[allow(unsafe_code)]
+        // SAFETY: `screened_avx512` only requires the four AVX-512 subsets it is
+        // compiled for, which the guard detected on the running CPU; it is the same
+        // safe code as `screened_portable`.
+        Simd::Avx512 if simd.available() => unsafe { screened_avx512(p, u, cols, v, block, out) },
+        #[cfg(target_arch = "x86_64")]
+        #[allow(unsafe_code)]
+        // SAFETY: `screened_avx2` only requires AVX2 and FMA, which the guard detected
+        // on the running CPU; it is the same safe code as `screened_portable`.
+        Simd::Avx2 if simd.available() => unsafe { screened_avx2(p, u, cols, v, block, out) },
+        _ => screened_portable(p, u, cols, v, block, out),
+    }
+}
+
+/// [`screened_portable`] compiled for AVX-512 (selected at run time).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512bw,avx512dq,avx512vl")]
+fn screened_avx512(
+    p: &crate::Point,
+    u: f32,
+    cols: &[Vec<f32>; crate::DIM],
+    v: &[f32],
+    block: std::ops::Range<usize>,
+    out: &mut [f32],
+) {
+    screened_portable(p, u, cols, v, block, out);
+}
+
+/// [`screened_portable`] compiled for AVX2 (selected at run time).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn screened_avx2(
+    p: &crate::Point,
+    u: f32,
+    cols: &[Vec<f32>; crate::DIM],
+    v: &[f32],
+    block: std::ops::Range<usize>,
+    out: &mut [f32],
+) {
+    screened_portable(p, u, cols, v, block, out);
+}
+
+/// The body of [`screened_block`].
+#[inline(always)]
+fn screened_portable(
     p: &crate::Point,
     u: f32,
     cols: &[Vec<f32>; crate::DIM],
@@ -254,7 +323,25 @@ mod tests {
                 })
                 .collect();
             let mut slack = vec![0.0f32; n];
-            screened_block(&p, u as f32, &cols, &to_f32(&v), 0..n, &mut slack);
+            screened_block(
+                Simd::Portable,
+                &p,
+                u as f32,
+                &cols,
+                &to_f32(&v),
+                0..n,
+                &mut slack,
+            );
+            // Every body the CPU supports gives the same slack, bit for bit.
+            for simd in Simd::supported() {
+                let mut other = vec![0.0f32; n];
+                screened_block(simd, &p, u as f32, &cols, &to_f32(&v), 0..n, &mut other);
+                let same = slack
+                    .iter()
+                    .zip(&other)
+                    .all(|(a, b)| a.to_bits() == b.to_bits());
+                assert!(same, "case {case}: {} differs", simd.name());
+            }
             let mut ruled_out = 0;
             for (j, &s) in slack.iter().enumerate() {
                 let c = sq_dist_f64(&p, &std::array::from_fn(|d| cols[d][j]));
@@ -268,7 +355,15 @@ mod tests {
         // Clearly positive reduced costs are ruled out.
         let p = [0.0; crate::DIM];
         let mut slack = vec![0.0f32; n];
-        screened_block(&p, -1.0, &cols, &vec![0.0; n], 0..n, &mut slack);
+        screened_block(
+            Simd::Portable,
+            &p,
+            -1.0,
+            &cols,
+            &vec![0.0; n],
+            0..n,
+            &mut slack,
+        );
         assert!(slack.iter().all(|&s| s >= 0.0));
     }
 

@@ -330,19 +330,31 @@ fn best_partners(
         .flat_map_iter(|(ci, list)| {
             ci.range.clone().map(move |i| {
                 let p = x.cloud.point(i);
-                let mut scored: Vec<(f64, u32, f64)> = list
+                let order = |a: &(f64, u32, f64), b: &(f64, u32, f64)| {
+                    a.0.total_cmp(&b.0).then(a.1.cmp(&b.1))
+                };
+                // The k smallest so far are kept whenever 4k pile up; after
+                // that only scores up to the largest kept one can still enter.
+                let mut scored: Vec<(f64, u32, f64)> = Vec::with_capacity(4 * k);
+                let mut bar = f64::INFINITY;
+                for j in list
                     .iter()
                     .flat_map(|&jb| y.clusters[jb as usize].range.clone())
-                    .map(|j| {
-                        let c = sq_dist_f64(&p, &y.cloud.point(j));
-                        (c - pot[j], j as u32, c)
-                    })
-                    .collect();
+                {
+                    let c = sq_dist_f64(&p, &y.cloud.point(j));
+                    let score = c - pot[j];
+                    if score <= bar {
+                        scored.push((score, j as u32, c));
+                        if scored.len() == 4 * k {
+                            scored.select_nth_unstable_by(k - 1, order);
+                            scored.truncate(k);
+                            bar = scored[k - 1].0;
+                        }
+                    }
+                }
                 let keep = k.min(scored.len());
                 if keep < scored.len() {
-                    scored.select_nth_unstable_by(keep, |a, b| {
-                        a.0.total_cmp(&b.0).then(a.1.cmp(&b.1))
-                    });
+                    scored.select_nth_unstable_by(keep, order);
                     scored.truncate(keep);
                 }
                 // A fresh vector: collecting in place would keep the large buffer alive.
