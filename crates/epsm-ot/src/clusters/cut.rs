@@ -1,5 +1,5 @@
-//! The per-point cut of a kept block pair (the second inequality of the
-//! parent module): which target blocks one source point keeps, as merged
+//! The per-point cut of a kept block pair (the ball and box inequalities of
+//! the parent module): which target blocks one source point keeps, as merged
 //! ranges.
 
 use std::ops::Range;
@@ -8,14 +8,20 @@ use super::{Clustered, PotentialFit};
 use crate::cpu::{Simd, active_simd};
 use crate::points::{DIM, Point};
 
-/// The point-to-block bound of the module doc for a list of target blocks, as
-/// `f32` columns so the test of one point against every block vectorises.
+/// The point-to-block bounds of the parent module (ball and box) for a list of target
+/// blocks, as `f32` columns so the test of one point against every block vectorises.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct PointCut {
     centroid: [Vec<f32>; DIM],
     /// Slope `a` of the target potential's fit.
     slope: [Vec<f32>; DIM],
     radius: Vec<f32>,
+    /// Bound on the rounding of the centroid to `f32` (included in `radius`).
+    shift: Vec<f32>,
+    /// Bounding boxes of the blocks' points: smallest coordinates.
+    lo: [Vec<f32>; DIM],
+    /// Bounding boxes of the blocks' points: largest coordinates.
+    hi: [Vec<f32>; DIM],
     /// `ḡ + max r^g`.
     offset: Vec<f32>,
     /// The blocks' point ranges.
@@ -83,6 +89,9 @@ impl PointCut {
             centroid: std::array::from_fn(|_| with()),
             slope: std::array::from_fn(|_| with()),
             radius: with(),
+            shift: with(),
+            lo: std::array::from_fn(|_| with()),
+            hi: std::array::from_fn(|_| with()),
             offset: with(),
             ranges: Vec::with_capacity(list.len()),
             continues: vec![0; list.len().div_ceil(64)],
@@ -92,10 +101,13 @@ impl PointCut {
             for d in 0..DIM {
                 cut.centroid[d].push(c.centroid[d] as f32);
                 cut.slope[d].push(fit.slope[d] as f32);
+                cut.lo[d].push(c.lo[d]);
+                cut.hi[d].push(c.hi[d]);
             }
             // Cover the rounding of the centroid to f32.
             let shift = c.centroid.iter().fold(0.0f64, |m, v| m.max(v.abs())) * 1e-6;
             cut.radius.push((c.radius + shift) as f32);
+            cut.shift.push(shift as f32);
             cut.offset.push((fit.mean + fit.max_residual) as f32);
             let k = cut.ranges.len();
             if cut.ranges.last().is_some_and(|r| r.end == c.range.start) {
@@ -106,10 +118,10 @@ impl PointCut {
         cut
     }
 
-    /// Keeps the blocks whose bound on `c(x, y_j) − g_j` may be at most `limit`, and
+    /// Keeps the blocks whose bounds on `c(x, y_j) − g_j` (ball and box) may both be at most `limit`, and
     /// returns whether there is any (the caller decides what a point that keeps none streams).
     ///
-    /// Conservative under `f32` rounding: a block is dropped only if its bound
+    /// Conservative under `f32` rounding: a block is dropped only if a bound
     /// exceeds `limit` by more than [`CUT_ROUNDING`] times the magnitudes
     /// involved, far above the accumulated rounding of these few operations,
     /// so potentials of any size (clouds far apart) never cut a pair they should not.
@@ -160,7 +172,11 @@ impl PointCut {
         let (c0, c1, c2, c3, c4) = (&c0[..n], &c1[..n], &c2[..n], &c3[..n], &c4[..n]);
         let [a0, a1, a2, a3, a4] = &self.slope;
         let (a0, a1, a2, a3, a4) = (&a0[..n], &a1[..n], &a2[..n], &a3[..n], &a4[..n]);
-        let (radius, offset) = (&self.radius[..n], &self.offset[..n]);
+        let (radius, offset, shift) = (&self.radius[..n], &self.offset[..n], &self.shift[..n]);
+        let [l0, l1, l2, l3, l4] = &self.lo;
+        let (l0, l1, l2, l3, l4) = (&l0[..n], &l1[..n], &l2[..n], &l3[..n], &l4[..n]);
+        let [h0, h1, h2, h3, h4] = &self.hi;
+        let (h0, h1, h2, h3, h4) = (&h0[..n], &h1[..n], &h2[..n], &h3[..n], &h4[..n]);
         for k in 0..n {
             let d = [
                 x[0] - c0[k],
@@ -180,7 +196,38 @@ impl PointCut {
             let tt = t[0] * t[0] + t[1] * t[1] + t[2] * t[2] + t[3] * t[3] + t[4] * t[4];
             let tilt = tt.sqrt() * radius[k];
             let slack = CUT_ROUNDING * (dd + tilt + offset[k].abs() + limit.abs());
-            keep[k] = dd - tilt - offset[k] <= limit + slack;
+            let ball = dd - tilt - offset[k] <= limit + slack;
+            // Box bound: `c − g_j = ‖y_j − p‖² − ⟨a, d⟩ − ‖a‖²/4 − ḡ − r_j` with `p = x + a/2`.
+            let p = [
+                x[0] + 0.5 * a0[k],
+                x[1] + 0.5 * a1[k],
+                x[2] + 0.5 * a2[k],
+                x[3] + 0.5 * a3[k],
+                x[4] + 0.5 * a4[k],
+            ];
+            let gap = [
+                box_gap(l0[k], h0[k], p[0]),
+                box_gap(l1[k], h1[k], p[1]),
+                box_gap(l2[k], h2[k], p[2]),
+                box_gap(l3[k], h3[k], p[3]),
+                box_gap(l4[k], h4[k], p[4]),
+            ];
+            let gg = gap[0] * gap[0]
+                + gap[1] * gap[1]
+                + gap[2] * gap[2]
+                + gap[3] * gap[3]
+                + gap[4] * gap[4];
+            let pp = p[0] * p[0] + p[1] * p[1] + p[2] * p[2] + p[3] * p[3] + p[4] * p[4];
+            let ad = a0[k] * d[0] + a1[k] * d[1] + a2[k] * d[2] + a3[k] * d[3] + a4[k] * d[4];
+            let aa = 0.25
+                * (a0[k] * a0[k] + a1[k] * a1[k] + a2[k] * a2[k] + a3[k] * a3[k] + a4[k] * a4[k]);
+            // Rounding: of `p` (within `u (gg + pp)` on `gg`), of `⟨a, d⟩` (within a few
+            // `u |a| |d| ≤ u (aa + dd)`), of the rest relative to its terms, and the centroid's
+            // own rounding (`⟨a, d⟩` off by up to `|a| shift`).
+            let box_slack = CUT_ROUNDING * (gg + pp + dd + aa + offset[k].abs() + limit.abs())
+                + 2.0 * aa.sqrt() * shift[k];
+            let boxed = gg - ad - aa - offset[k] <= limit + box_slack;
+            keep[k] = ball & boxed;
         }
         // Bit masks: a kept block opens a range unless it joins the previous kept block
         // (continues it), and closes it unless the next block joins it.
@@ -215,6 +262,15 @@ impl PointCut {
             r.end = self.ranges[k].end;
         }
     }
+}
+
+/// Distance from `p` to the interval `[lo, hi]` along one axis, as comparisons and selects
+/// (`f32::max` is not vectorised here: its NaN rule adds a scalar test per lane).
+#[inline(always)]
+fn box_gap(lo: f32, hi: f32, p: f32) -> f32 {
+    let (below, above) = (lo - p, p - hi);
+    let gap = if below > above { below } else { above };
+    if gap > 0.0 { gap } else { 0.0 }
 }
 
 /// Appends `r` to `out`, extending the last range instead if `r` continues it.

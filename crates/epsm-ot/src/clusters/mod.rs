@@ -24,9 +24,18 @@
 //!
 //! `c_ij − f_i − g_j ≥ ‖d‖² − ‖2d + a‖ r_J − ḡ − max r^g − f_i`,
 //!
-//! which is free of the source cluster's radius ([`PointCut`]). On the
-//! benchmark's blob pairs at the final ε it skips about 60 % of the pairs the
-//! block support keeps (n = 16384 and 65536).
+//! which is free of the source cluster's radius, and, with the target fit
+//! `g_j = ḡ + ⟨a, y_j − c_J⟩ + r_j` and `p = x_i + a/2` (completing the square),
+//!
+//! `c_ij − g_j = ‖y_j − p‖² − ⟨a, d⟩ − ‖a‖²/4 − ḡ − r_j ≥ box(p)² − ⟨a, d⟩ − ‖a‖²/4 − ḡ − max r^g`
+//!
+//! with `box(p)` the distance from `p` to the bounding box of `J`'s points.
+//! A block is skipped when either bound exceeds the limit ([`PointCut`]): the
+//! box is much tighter than the ball in the colour axes, where a cluster of
+//! an image is thin. On the benchmark's blob pair at n = 16384 the point
+//! cut keeps 36 of the 89 listed blocks per point (44 with the ball alone),
+//! 1.84 G pair evaluations in the whole solve against 2.11 G; 62 % of the
+//! pairs it keeps are within the truncation.
 mod bounds;
 mod cut;
 

@@ -298,7 +298,7 @@ pub(super) fn softmin_blocks(
                 .map(|&j| y.ranges[j as usize].len() as u32)
                 .collect();
             let total: usize = targets.ranges().iter().map(Range::len).sum();
-            let mut scores = vec![0.0f32; total.div_ceil(16) * 16];
+            let mut scores = vec![0.0f32; total.div_ceil(16) * 16 + 16];
             let mut kept_lens = Vec::with_capacity(list.len());
             let mut block = vec![0.0f32; list.len()];
             // Block masses relative to one shared reference `exp(top)`, rescaled when it grows.
