@@ -1,6 +1,5 @@
-//! The per-point cut of a kept block pair (the ball and box inequalities of
-//! the parent module): which target blocks one source point keeps, as merged
-//! ranges.
+//! The per-point cut of a kept block pair (the box inequality of the parent
+//! module): which target blocks one source point keeps, as merged ranges.
 
 use std::ops::Range;
 
@@ -8,22 +7,24 @@ use super::{Clustered, PotentialFit};
 use crate::cpu::{Simd, active_simd};
 use crate::points::{DIM, Point};
 
-/// The point-to-block bounds of the parent module (ball and box) for a list of target
-/// blocks, as `f32` columns so the test of one point against every block vectorises.
+/// The point-to-block box bound of the parent module for a list of target blocks, as
+/// `f32` columns so the test of one point against every block vectorises.
+///
+/// Per block, with the fit `g_j = ḡ + ⟨a, y_j − c⟩ + r_j`: for every `j` in it,
+/// `c(x, y_j) − g_j ≥ box(x + a/2)² − ⟨a, x⟩ − K` with `K = ‖a‖²/4 + ḡ + max r − ⟨a, c⟩`
+/// (taken in `f64`, so the centroid's rounding does not enter).
 #[derive(Debug, Clone, Default)]
 pub(crate) struct PointCut {
-    centroid: [Vec<f32>; DIM],
-    /// Slope `a` of the target potential's fit.
-    slope: [Vec<f32>; DIM],
-    radius: Vec<f32>,
-    /// Bound on the rounding of the centroid to `f32` (included in `radius`).
-    shift: Vec<f32>,
+    /// Half the slope of the target potential's fit, `a/2`.
+    half_slope: [Vec<f32>; DIM],
     /// Bounding boxes of the blocks' points: smallest coordinates.
     lo: [Vec<f32>; DIM],
     /// Bounding boxes of the blocks' points: largest coordinates.
     hi: [Vec<f32>; DIM],
-    /// `ḡ + max r^g`.
+    /// `K` of the bound.
     offset: Vec<f32>,
+    /// The block's part of the rounding slack: [`CUT_ROUNDING`] `(‖a‖² + |K|)`.
+    slack: Vec<f32>,
     /// The blocks' point ranges.
     ranges: Vec<Range<usize>>,
     /// Bit `k`: block `k` starts where block `k − 1` ends (layout of [`Selection`]'s bits).
@@ -86,29 +87,29 @@ impl PointCut {
     pub fn gather(clustered: &Clustered, fits: &[PotentialFit], list: &[u32]) -> Self {
         let with = || Vec::with_capacity(list.len());
         let mut cut = Self {
-            centroid: std::array::from_fn(|_| with()),
-            slope: std::array::from_fn(|_| with()),
-            radius: with(),
-            shift: with(),
+            half_slope: std::array::from_fn(|_| with()),
             lo: std::array::from_fn(|_| with()),
             hi: std::array::from_fn(|_| with()),
             offset: with(),
+            slack: with(),
             ranges: Vec::with_capacity(list.len()),
             continues: vec![0; list.len().div_ceil(64)],
         };
         for &j in list {
             let (c, fit) = (&clustered.clusters[j as usize], &fits[j as usize]);
+            let mut slope_sq = 0.0;
+            let mut slope_centroid = 0.0;
             for d in 0..DIM {
-                cut.centroid[d].push(c.centroid[d] as f32);
-                cut.slope[d].push(fit.slope[d] as f32);
+                cut.half_slope[d].push((0.5 * fit.slope[d]) as f32);
                 cut.lo[d].push(c.lo[d]);
                 cut.hi[d].push(c.hi[d]);
+                slope_sq += fit.slope[d] * fit.slope[d];
+                slope_centroid += fit.slope[d] * c.centroid[d];
             }
-            // Cover the rounding of the centroid to f32.
-            let shift = c.centroid.iter().fold(0.0f64, |m, v| m.max(v.abs())) * 1e-6;
-            cut.radius.push((c.radius + shift) as f32);
-            cut.shift.push(shift as f32);
-            cut.offset.push((fit.mean + fit.max_residual) as f32);
+            let offset = 0.25 * slope_sq + fit.mean + fit.max_residual - slope_centroid;
+            cut.offset.push(offset as f32);
+            cut.slack
+                .push((f64::from(CUT_ROUNDING) * (slope_sq + offset.abs())) as f32);
             let k = cut.ranges.len();
             if cut.ranges.last().is_some_and(|r| r.end == c.range.start) {
                 cut.continues[k / 64] |= 1 << (k % 64);
@@ -118,10 +119,10 @@ impl PointCut {
         cut
     }
 
-    /// Keeps the blocks whose bounds on `c(x, y_j) − g_j` (ball and box) may both be at most `limit`, and
+    /// Keeps the blocks whose bound on `c(x, y_j) − g_j` may be at most `limit`, and
     /// returns whether there is any (the caller decides what a point that keeps none streams).
     ///
-    /// Conservative under `f32` rounding: a block is dropped only if a bound
+    /// Conservative under `f32` rounding: a block is dropped only if its bound
     /// exceeds `limit` by more than [`CUT_ROUNDING`] times the magnitudes
     /// involved, far above the accumulated rounding of these few operations,
     /// so potentials of any size (clouds far apart) never cut a pair they should not.
@@ -168,66 +169,40 @@ impl PointCut {
         let n = self.ranges.len();
         out.keep.resize(n, false);
         let keep = &mut out.keep[..n];
-        let [c0, c1, c2, c3, c4] = &self.centroid;
-        let (c0, c1, c2, c3, c4) = (&c0[..n], &c1[..n], &c2[..n], &c3[..n], &c4[..n]);
-        let [a0, a1, a2, a3, a4] = &self.slope;
-        let (a0, a1, a2, a3, a4) = (&a0[..n], &a1[..n], &a2[..n], &a3[..n], &a4[..n]);
-        let (radius, offset, shift) = (&self.radius[..n], &self.offset[..n], &self.shift[..n]);
+        let [h0, h1, h2, h3, h4] = &self.half_slope;
+        let (h0, h1, h2, h3, h4) = (&h0[..n], &h1[..n], &h2[..n], &h3[..n], &h4[..n]);
         let [l0, l1, l2, l3, l4] = &self.lo;
         let (l0, l1, l2, l3, l4) = (&l0[..n], &l1[..n], &l2[..n], &l3[..n], &l4[..n]);
-        let [h0, h1, h2, h3, h4] = &self.hi;
-        let (h0, h1, h2, h3, h4) = (&h0[..n], &h1[..n], &h2[..n], &h3[..n], &h4[..n]);
+        let [u0, u1, u2, u3, u4] = &self.hi;
+        let (u0, u1, u2, u3, u4) = (&u0[..n], &u1[..n], &u2[..n], &u3[..n], &u4[..n]);
+        let (offset, block_slack) = (&self.offset[..n], &self.slack[..n]);
+        // Rounding of `p = x + a/2` (within a few `u (gg + ‖p‖²)` on `gg`, `‖p‖² ≤ 2‖x‖² +
+        // ‖a‖²/2`), of `⟨a, x⟩` (within a few `u ‖a‖ ‖x‖ ≤ u (‖a‖² + ‖x‖²)`), of `K` and of the
+        // limit: the point's part here, the block's in `slack`, `gg`'s in the loop.
+        let xx = x[0] * x[0] + x[1] * x[1] + x[2] * x[2] + x[3] * x[3] + x[4] * x[4];
+        let bar = limit + CUT_ROUNDING * (3.0 * xx + limit.abs());
         for k in 0..n {
-            let d = [
-                x[0] - c0[k],
-                x[1] - c1[k],
-                x[2] - c2[k],
-                x[3] - c3[k],
-                x[4] - c4[k],
-            ];
-            let t = [
-                2.0 * d[0] + a0[k],
-                2.0 * d[1] + a1[k],
-                2.0 * d[2] + a2[k],
-                2.0 * d[3] + a3[k],
-                2.0 * d[4] + a4[k],
-            ];
-            let dd = d[0] * d[0] + d[1] * d[1] + d[2] * d[2] + d[3] * d[3] + d[4] * d[4];
-            let tt = t[0] * t[0] + t[1] * t[1] + t[2] * t[2] + t[3] * t[3] + t[4] * t[4];
-            let tilt = tt.sqrt() * radius[k];
-            let slack = CUT_ROUNDING * (dd + tilt + offset[k].abs() + limit.abs());
-            let ball = dd - tilt - offset[k] <= limit + slack;
-            // Box bound: `c − g_j = ‖y_j − p‖² − ⟨a, d⟩ − ‖a‖²/4 − ḡ − r_j` with `p = x + a/2`.
             let p = [
-                x[0] + 0.5 * a0[k],
-                x[1] + 0.5 * a1[k],
-                x[2] + 0.5 * a2[k],
-                x[3] + 0.5 * a3[k],
-                x[4] + 0.5 * a4[k],
+                x[0] + h0[k],
+                x[1] + h1[k],
+                x[2] + h2[k],
+                x[3] + h3[k],
+                x[4] + h4[k],
             ];
             let gap = [
-                box_gap(l0[k], h0[k], p[0]),
-                box_gap(l1[k], h1[k], p[1]),
-                box_gap(l2[k], h2[k], p[2]),
-                box_gap(l3[k], h3[k], p[3]),
-                box_gap(l4[k], h4[k], p[4]),
+                box_gap(l0[k], u0[k], p[0]),
+                box_gap(l1[k], u1[k], p[1]),
+                box_gap(l2[k], u2[k], p[2]),
+                box_gap(l3[k], u3[k], p[3]),
+                box_gap(l4[k], u4[k], p[4]),
             ];
             let gg = gap[0] * gap[0]
                 + gap[1] * gap[1]
                 + gap[2] * gap[2]
                 + gap[3] * gap[3]
                 + gap[4] * gap[4];
-            let pp = p[0] * p[0] + p[1] * p[1] + p[2] * p[2] + p[3] * p[3] + p[4] * p[4];
-            let ad = a0[k] * d[0] + a1[k] * d[1] + a2[k] * d[2] + a3[k] * d[3] + a4[k] * d[4];
-            let aa = 0.25
-                * (a0[k] * a0[k] + a1[k] * a1[k] + a2[k] * a2[k] + a3[k] * a3[k] + a4[k] * a4[k]);
-            // Rounding: of `p` (within `u (gg + pp)` on `gg`), of `⟨a, d⟩` (within a few
-            // `u |a| |d| ≤ u (aa + dd)`), of the rest relative to its terms, and the centroid's
-            // own rounding (`⟨a, d⟩` off by up to `|a| shift`).
-            let box_slack = CUT_ROUNDING * (gg + pp + dd + aa + offset[k].abs() + limit.abs())
-                + 2.0 * aa.sqrt() * shift[k];
-            let boxed = gg - ad - aa - offset[k] <= limit + box_slack;
-            keep[k] = ball & boxed;
+            let hx = h0[k] * x[0] + h1[k] * x[1] + h2[k] * x[2] + h3[k] * x[3] + h4[k] * x[4];
+            keep[k] = gg - 2.0 * hx - offset[k] <= bar + CUT_ROUNDING * gg + block_slack[k];
         }
         // Bit masks: a kept block opens a range unless it joins the previous kept block
         // (continues it), and closes it unless the next block joins it.
