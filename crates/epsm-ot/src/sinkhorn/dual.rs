@@ -10,8 +10,9 @@
 //!    support whose reduced-cost bound is at most `truncation · ε` (built
 //!    once per scale: refreshing it before every update gave the same plans
 //!    and cost 4 % more time at n = 16384), each point streaming only the
-//!    kept blocks that its own bound on `c_ij − f_i − g_j` keeps (`pass::Cut`,
-//!    `clusters::PointCut`: 36 % fewer pairs at n = 16384, 37 % at 65536),
+//!    kept blocks that its own bounds on `c_ij − f_i − g_j` keep (`pass::Cut`,
+//!    `clusters::PointCut`: 36 % fewer pairs at n = 16384, 37 % at 65536,
+//!    with a ball bound; its box bound takes 13 % more off at 16384),
 //!    with over-relaxed updates (ω = `annealing_overrelaxation`). A scale
 //!    opens with a target update at its ε whose pass also sums the plan per
 //!    block pair, followed by the two-grid correction of `coarse` (exact

@@ -46,10 +46,13 @@
 //! `diameter²`, so a score is rounded by up to about `2⁻²⁴ diameter²/ε`
 //! (in units of ε), and the polish's marginal error stalls near that
 //! rounding. On the 1024-point blobs pair at blur 0.01 (the clouds scaled,
-//! blur fixed), ×1 (score rounding 5e-4 ε) converges in 174 updates; ×3 and
-//! ×10 stall (L1 errors 3e-3 and 8e-3 after 5000 polish updates; the stall
-//! test of `stall_margin` ends them after 826 and 198, at 6e-3 and 8e-3), where
-//! `exact_prices` still converges (4795 and 2819 updates); ×100 (rounding 5 ε) stalls at
+//! blur fixed), ×1 (score rounding 5e-4 ε) converges in 172 updates; ×3 and
+//! ×10 stall (L1 errors 3.4e-3 and 8.5e-3 after 5000 polish updates; the stall
+//! test of `stall_margin` ends them after 302 and 427, at 6.6e-3 and 8.8e-3), where
+//! `exact_prices` still converges (4446 and 2286 updates; this close to the
+//! rounding, whether it does turns on the order of the rows' sums: changes of
+//! the pairs the point cut keeps have moved ×3 between 3242 updates and a stall
+//! at 1.3e-3); ×100 (rounding 5 ε) stalls at
 //! 0.2 (`exact_prices`: 1.1); at ×1000 the error overflows in both. The
 //! outcomes: a converged solve; a solve whose polish stops (out of updates,
 //! or stalled) with a finite error above `marginal_tolerance`, returned and counted in

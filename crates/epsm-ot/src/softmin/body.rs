@@ -46,11 +46,61 @@ fn score_into<const COSTS: bool>(
     }
 }
 
+/// The scores of [`score_into`] for the targets `range` into `out[..range.len()]`, rounded up
+/// to whole chunks of `W` lanes (the vector width of the body): the last partial chunk is
+/// computed whole from the targets after the range (its extra scores land in
+/// `out[range.len()..]`, at most `W − 1` of them, for the caller to overwrite or mask), or
+/// one by one where the columns end first.
+///
+/// A row streams many short ranges (about a hundred targets each at n = 16384), so the
+/// compiled loop's scalar remainder of up to `W − 1` pairs per range would cost a fifth of
+/// the scoring; with a multiple of `W` targets it never runs.
+#[inline(always)]
+fn score_chunks<const W: usize>(
+    x: &Point,
+    y: &[Vec<f32>; DIM],
+    lw: &[f32],
+    g: &[f32],
+    inv_eps: f32,
+    range: Range<usize>,
+    out: &mut [f32],
+) {
+    let len = range.len();
+    let whole = if range.start + len.next_multiple_of(W) <= lw.len() {
+        len.next_multiple_of(W)
+    } else {
+        len - len % W
+    };
+    score_into::<false>(
+        x,
+        y,
+        lw,
+        g,
+        inv_eps,
+        range.start..range.start + whole,
+        &mut out[..whole],
+        &mut [],
+    );
+    if whole < len {
+        score_into::<false>(
+            x,
+            y,
+            lw,
+            g,
+            inv_eps,
+            range.start + whole..range.end,
+            &mut out[whole..len],
+            &mut [],
+        );
+    }
+}
+
 /// [`stream_row`] without moments: scores of consecutive ranges fill one
 /// [`BLOCK`]-long buffer, reduced (maximum, exponentials, sum) once it is
 /// full, so many short ranges cost no more per pair than one long one.
+/// Scores are computed in chunks of `W` lanes ([`score_chunks`]).
 #[inline(always)]
-pub(super) fn gathered_sum(
+pub(super) fn gathered_sum<const W: usize>(
     x: &Point,
     y: &[Vec<f32>; DIM],
     lw: &[f32],
@@ -59,27 +109,27 @@ pub(super) fn gathered_sum(
     ranges: &[Range<usize>],
     acc: &mut RowSum,
 ) -> u64 {
-    let mut scores = [f32::NEG_INFINITY; BLOCK];
+    // Room for a last chunk's extra scores past a full block.
+    let mut scores = [f32::NEG_INFINITY; BLOCK + LANES];
     let mut fill = 0;
     let mut pairs = 0;
     for range in ranges {
         let mut start = range.start;
         while start < range.end {
             let len = (range.end - start).min(BLOCK - fill);
-            score_into::<false>(
+            score_chunks::<W>(
                 x,
                 y,
                 lw,
                 g,
                 inv_eps,
                 start..start + len,
-                &mut scores[fill..fill + len],
-                &mut [],
+                &mut scores[fill..],
             );
             fill += len;
             start += len;
             if fill == BLOCK {
-                reduce_scores(&mut scores, acc);
+                reduce_scores(&mut scores[..BLOCK], acc);
                 fill = 0;
             }
         }
@@ -107,9 +157,10 @@ fn reduce_scores(scores: &mut [f32], acc: &mut RowSum) {
     acc.sum += f64::from(lane_sum(scores));
 }
 
-/// The body of [`stream_blocks`]: scores, their maximum, weights, then one sum per block.
+/// The body of [`stream_blocks`]: scores (in chunks of `W` lanes, [`score_chunks`]), their
+/// maximum, weights, then one sum per block.
 #[inline(always)]
-pub(super) fn block_sums(
+pub(super) fn block_sums<const W: usize>(
     x: &Point,
     y: &[Vec<f32>; DIM],
     lw: &[f32],
@@ -120,16 +171,7 @@ pub(super) fn block_sums(
 ) -> u64 {
     let mut len = 0;
     for range in ranges {
-        score_into::<false>(
-            x,
-            y,
-            lw,
-            g,
-            inv_eps,
-            range.clone(),
-            &mut sums.scores[len..len + range.len()],
-            &mut [],
-        );
+        score_chunks::<W>(x, y, lw, g, inv_eps, range.clone(), &mut sums.scores[len..]);
         len += range.len();
     }
     let padded = len.div_ceil(LANES) * LANES;

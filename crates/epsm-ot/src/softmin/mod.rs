@@ -93,7 +93,7 @@ pub(crate) enum Sink<'a, 'b> {
 pub(crate) struct BlockSums<'a> {
     /// Lengths of the blocks, in order; together they are the streamed ranges.
     pub lens: &'a [u32],
-    /// Scratch for the row's scores: at least the blocks' total length rounded up to 16.
+    /// Scratch for the row's scores: at least the blocks' total length rounded up to 16, plus 16.
     pub scores: &'a mut [f32],
     /// `out[k] = Σ_{j ∈ block k} exp(score_j − max)`.
     pub out: &'a mut [f32],
@@ -178,7 +178,7 @@ fn stream_with<const MOMENTS: bool>(
         Simd::Avx2 if simd.available() => unsafe {
             stream_avx2::<MOMENTS>(x, y, lw, g, inv_eps, ranges, sink)
         },
-        _ => stream_portable::<MOMENTS>(x, y, lw, g, inv_eps, ranges, sink),
+        _ => stream_portable::<MOMENTS, PORTABLE_CHUNK>(x, y, lw, g, inv_eps, ranges, sink),
     }
 }
 
@@ -194,7 +194,7 @@ fn stream_avx512<const MOMENTS: bool>(
     ranges: &[Range<usize>],
     sink: Sink,
 ) -> u64 {
-    stream_portable::<MOMENTS>(x, y, lw, g, inv_eps, ranges, sink)
+    stream_portable::<MOMENTS, 16>(x, y, lw, g, inv_eps, ranges, sink)
 }
 
 /// [`stream_portable`] compiled for 256-bit AVX2 registers (selected at run time).
@@ -209,12 +209,17 @@ fn stream_avx2<const MOMENTS: bool>(
     ranges: &[Range<usize>],
     sink: Sink,
 ) -> u64 {
-    stream_portable::<MOMENTS>(x, y, lw, g, inv_eps, ranges, sink)
+    stream_portable::<MOMENTS, 8>(x, y, lw, g, inv_eps, ranges, sink)
 }
 
-/// The portable body of [`stream_row`] and [`stream_blocks`] (SSE2 on any x86_64).
+/// Lanes per chunk of scores in the portable body (two 128-bit SSE2 registers).
+const PORTABLE_CHUNK: usize = 8;
+
+/// The portable body of [`stream_row`] and [`stream_blocks`] (SSE2 on any x86_64), scoring
+/// targets in chunks of `W` lanes (one or two registers of the body's instruction set; the
+/// chunk width changes no score, only how many are computed past a range's end).
 #[inline(always)]
-fn stream_portable<const MOMENTS: bool>(
+fn stream_portable<const MOMENTS: bool, const W: usize>(
     x: &Point,
     y: &[Vec<f32>; DIM],
     lw: &[f32],
@@ -232,13 +237,15 @@ fn stream_portable<const MOMENTS: bool>(
     // functions that would not inherit the caller's SIMD target features.
     let mut pairs = 0;
     match sink {
-        Sink::Row(acc) if !MOMENTS => pairs = gathered_sum(x, y, lw, g, inv_eps, ranges, acc),
+        Sink::Row(acc) if !MOMENTS => {
+            pairs = gathered_sum::<W>(x, y, lw, g, inv_eps, ranges, acc);
+        }
         Sink::Row(acc) => {
             for r in ranges {
                 pairs += push_range_moments(x, y, lw, g, inv_eps, r.clone(), acc, &mut scratch);
             }
         }
-        Sink::Blocks(sums) => pairs = block_sums(x, y, lw, g, inv_eps, ranges, sums),
+        Sink::Blocks(sums) => pairs = block_sums::<W>(x, y, lw, g, inv_eps, ranges, sums),
     }
     pairs
 }
@@ -280,7 +287,15 @@ mod tests {
             let (mut a, mut b) = (RowSum::new(), RowSum::new());
             let pa =
                 stream_with::<true>(body, &x, &y, &lw, &g, inv_eps, &ranges, Sink::Row(&mut a));
-            let pb = stream_portable::<true>(&x, &y, &lw, &g, inv_eps, &ranges, Sink::Row(&mut b));
+            let pb = stream_portable::<true, PORTABLE_CHUNK>(
+                &x,
+                &y,
+                &lw,
+                &g,
+                inv_eps,
+                &ranges,
+                Sink::Row(&mut b),
+            );
             assert_eq!(pa, pb);
             let (la, lb) = (a.log_sum(), b.log_sum());
             assert!(
@@ -298,6 +313,100 @@ mod tests {
                 (ca - cb).abs() <= 1e-6 * cb.abs().max(1e-3),
                 "case {case}: cost"
             );
+        }
+    }
+
+    #[test]
+    fn short_ranges_match_direct_sums_in_every_body() {
+        // Many short ranges, of every length modulo the chunk widths, the last one ending
+        // at the columns' end (where a chunk cannot be completed past the range), so the
+        // scores computed past a range's end must be overwritten or masked in both sinks.
+        let mut rng = crate::synthetic::Rng::new(11);
+        for body in Simd::supported() {
+            for case in 0..12 {
+                let n = 40 + rng.index(600);
+                let y: [Vec<f32>; DIM] =
+                    std::array::from_fn(|_| (0..n).map(|_| rng.uniform()).collect());
+                let lw: Vec<f32> = (0..n).map(|_| -3.0 * rng.uniform()).collect();
+                let g: Vec<f32> = (0..n).map(|_| 0.05 * rng.uniform()).collect();
+                let x: Point = std::array::from_fn(|_| rng.uniform());
+                let inv_eps = 10.0f32.powf(1.0 + 2.0 * rng.uniform());
+                // Ranges with gaps between them (skipped targets must not count).
+                let mut ranges = Vec::new();
+                let mut start = rng.index(5);
+                while start < n {
+                    let end = (start + 1 + rng.index(40)).min(n);
+                    ranges.push(start..end);
+                    start = end + rng.index(3);
+                }
+                if let Some(last) = ranges.last_mut() {
+                    last.end = n;
+                }
+                let score = |j: usize| {
+                    let c: f64 = (0..DIM).map(|d| f64::from(x[d] - y[d][j]).powi(2)).sum();
+                    f64::from(lw[j]) + (f64::from(g[j]) - c) * f64::from(inv_eps)
+                };
+                let block_scores: Vec<Vec<f64>> = ranges
+                    .iter()
+                    .map(|r| r.clone().map(score).collect())
+                    .collect();
+                let m = block_scores
+                    .iter()
+                    .flatten()
+                    .copied()
+                    .fold(f64::NEG_INFINITY, f64::max);
+                let direct: Vec<f64> = block_scores
+                    .iter()
+                    .map(|b| b.iter().map(|v| (v - m).exp()).sum())
+                    .collect();
+                let total: f64 = direct.iter().sum();
+                let mut acc = RowSum::new();
+                let pairs = stream_with::<false>(
+                    body,
+                    &x,
+                    &y,
+                    &lw,
+                    &g,
+                    inv_eps,
+                    &ranges,
+                    Sink::Row(&mut acc),
+                );
+                let expected: usize = ranges.iter().map(Range::len).sum();
+                assert_eq!(pairs, expected as u64);
+                let (got, want) = (acc.log_sum(), m + total.ln());
+                assert!(
+                    (got - want).abs() < 1e-4,
+                    "{body:?} case {case}: {got} vs {want}"
+                );
+                let lens: Vec<u32> = ranges.iter().map(|r| r.len() as u32).collect();
+                let mut scores = vec![0.0f32; expected.div_ceil(16) * 16 + 16];
+                let mut out = vec![0.0f32; ranges.len()];
+                let mut sums = BlockSums {
+                    lens: &lens,
+                    scores: &mut scores,
+                    out: &mut out,
+                    max: f32::NEG_INFINITY,
+                };
+                let pairs = stream_with::<false>(
+                    body,
+                    &x,
+                    &y,
+                    &lw,
+                    &g,
+                    inv_eps,
+                    &ranges,
+                    Sink::Blocks(&mut sums),
+                );
+                assert_eq!(pairs, expected as u64);
+                let shift = (f64::from(sums.max) - m).exp();
+                for (k, (&o, d)) in out.iter().zip(&direct).enumerate() {
+                    let o = f64::from(o) * shift;
+                    assert!(
+                        (o - d).abs() <= 1e-4 * d.max(1e-6),
+                        "{body:?} case {case} block {k}: {o} vs {d}"
+                    );
+                }
+            }
         }
     }
 

@@ -289,27 +289,23 @@ fn bridged_corrections_rebuild_the_support_and_still_converge() {
 }
 
 /// The slowest converging polish measured: the 1024-point benchmark pair scaled
-/// ×3 (the `f32` kernel's rounding near its limit) from the exact prices, its
-/// error falling about 3 % per 100 updates to the tolerance at update 4795.
-/// The stall test must leave it running: a `stall_margin` below 1.16 stopped it.
+/// ×10 (the `f32` kernel's rounding near its limit) from the exact prices,
+/// reaching the tolerance at update 2286. The stall test must leave it running,
+/// even at the strictest `stall_margin` (1). (×3 converges more slowly still, 4446
+/// updates, but whether it converges at all turns on the order of the kernel's sums.)
 #[test]
 fn the_slowest_converging_polish_is_not_stopped_as_stalled() {
     let (s, t) = blobs_pair(1024, 0).unwrap_or_else(|| panic!("fixture"));
     let scaled = |c: &PointCloud| {
-        let points: Vec<_> = c.points().map(|p| p.map(|v| 3.0 * v)).collect();
+        let points: Vec<_> = c.points().map(|p| p.map(|v| 10.0 * v)).collect();
         PointCloud::from_points(&points).unwrap_or_else(|e| panic!("{e}"))
     };
     let settings = SinkhornSettings {
         exact_prices: true,
+        stall_margin: 1.0,
         ..SinkhornSettings::default()
     };
     let r = solve(&scaled(&s), &scaled(&t), &settings);
     assert_eq!(r.stats.unconverged_solves, 0, "{:?}", r.stats);
-    assert!(r.stats.iterations > 4000, "{} updates", r.stats.iterations);
-    let tight = SinkhornSettings {
-        stall_margin: 1.1,
-        ..settings
-    };
-    let r = solve(&scaled(&s), &scaled(&t), &tight);
-    assert_eq!(r.stats.unconverged_solves, 1, "{:?}", r.stats);
+    assert!(r.stats.iterations > 2000, "{} updates", r.stats.iterations);
 }

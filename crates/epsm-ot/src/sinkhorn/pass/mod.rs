@@ -12,7 +12,9 @@ use rayon::prelude::*;
 
 use super::dual::Dual;
 use crate::OtError;
-use crate::clusters::{Clustered, PointCut, PotentialFit, Selection, fit_potentials, push_merged};
+use crate::clusters::{
+    Bound, Clustered, PointCut, PotentialFit, Selection, fit_potentials, push_merged,
+};
 use crate::points::{Point, PointCloud};
 use crate::softmin::{BlockSums, RowSum, stream_blocks, stream_row};
 
@@ -78,10 +80,10 @@ struct Targets<'a> {
 }
 
 impl<'a> Targets<'a> {
-    fn new(y: &Level, list: &[u32], fitted: Option<&Fitted<'a>>) -> Self {
+    fn new(y: &Level, list: &[u32], fitted: Option<&Fitted<'a>>, bound: Bound) -> Self {
         let all = Selection::all(list.len(), merged_ranges(&y.ranges, list));
         Self {
-            cut: fitted.map(|f| (PointCut::gather(f.clustered, &f.fits, list), f.cut)),
+            cut: fitted.map(|f| (PointCut::gather(f.clustered, &f.fits, list, bound), f.cut)),
             now: all.clone(),
             all,
         }
@@ -158,7 +160,7 @@ pub(super) fn softmin(
         .zip(lists)
         .map(|(rows, list)| {
             let mut pairs = 0;
-            let mut targets = Targets::new(y, list, fitted.as_ref());
+            let mut targets = Targets::new(y, list, fitted.as_ref(), Bound::Box);
             let out = rows
                 .clone()
                 .map(|i| {
@@ -224,7 +226,7 @@ pub(crate) fn barycentres(
                 costs: Vec::with_capacity(rows.len()),
                 pairs: 0,
             };
-            let mut targets = Targets::new(&fy, list, fitted.as_ref());
+            let mut targets = Targets::new(&fy, list, fitted.as_ref(), Bound::Box);
             for i in rows.clone() {
                 let point = x.cloud.point(i);
                 targets.point(i, &point);
@@ -292,13 +294,14 @@ pub(super) fn softmin_blocks(
         .zip(lists)
         .map(|(rows, list)| {
             let mut pairs = 0;
-            let mut targets = Targets::new(y, list, fitted.as_ref());
+            // The ball bound: the block masses keep the weak links the correction needs.
+            let mut targets = Targets::new(y, list, fitted.as_ref(), Bound::Ball);
             let lens: Vec<u32> = list
                 .iter()
                 .map(|&j| y.ranges[j as usize].len() as u32)
                 .collect();
             let total: usize = targets.ranges().iter().map(Range::len).sum();
-            let mut scores = vec![0.0f32; total.div_ceil(16) * 16];
+            let mut scores = vec![0.0f32; total.div_ceil(16) * 16 + 16];
             let mut kept_lens = Vec::with_capacity(list.len());
             let mut block = vec![0.0f32; list.len()];
             // Block masses relative to one shared reference `exp(top)`, rescaled when it grows.
