@@ -45,22 +45,22 @@ impl Accel {
         self.tlas.slots.len() <= LINEAR_INSTANCES
     }
 
-    /// The hits of the world-space `rays` in `lanes` on the instances, each
-    /// lane from its best hit so far in `hits` on (its `t`, the ray's
+    /// The hits of the world-space rays `world` in `lanes` on the instances,
+    /// each lane from its best hit so far in `hits` on (its `t`, the ray's
     /// `t_max` outside `hits.found`), taken into `hits`; with `ANY`, the
     /// lanes with any hit (the others' fields unspecified).
     #[inline(never)]
     pub(super) fn instances16<const ANY: bool, B: Lanes>(
         &self,
-        k: B,
-        rays: &Rays16<B>,
+        world: &RayLanes<B>,
         lanes: Mask16,
         hits: &mut Hits16<B>,
     ) {
+        let k = world.k;
         k.run(
             #[inline(always)]
             || {
-                let world = RayLanes::new(k, rays);
+                let world = *world;
                 let mut todo = lanes;
                 for (&slot, bounds) in self.tlas.slots.iter().zip(&self.tlas.boxes) {
                     if ANY && !todo.any() {
@@ -82,9 +82,9 @@ impl Accel {
                             let local = RayLanes::new(
                                 k,
                                 &Rays16 {
-                                    origin: affine::transform_point(k, to_object, rays.origin),
-                                    dir: affine::transform_vector(k, to_object, rays.dir),
-                                    t_min: rays.t_min,
+                                    origin: affine::transform_point(k, to_object, world.origin),
+                                    dir: affine::transform_vector(k, to_object, world.dir),
+                                    t_min: world.test.t_min,
                                     t_max: hits.t,
                                 },
                             );

@@ -190,12 +190,14 @@ impl Accel {
                 world_index: U32x16::select(wins, none, hits.world_index),
             };
         }
-        if !self.tlas.slots.is_empty() && active.any() && self.instances_in_lanes() {
-            self.instances16::<false, _>(k, rays, active, &mut hits);
-        } else if !self.tlas.slots.is_empty() && active.any() {
-            let (rays, best) = (lanes::PlainRays::new(rays), hits.to_lanes());
-            let lanes = std::array::from_fn(|i| (active.test(i), rays.lane(i), best[i]));
-            hits = Hits16::from_lanes(k, &self.instances_per_lane::<false, _>(k, &lanes));
+        if !self.tlas.slots.is_empty() && active.any() {
+            if self.instances_in_lanes() {
+                self.instances16::<false, _>(&lanes, active, &mut hits);
+            } else {
+                let (rays, best) = (lanes::PlainRays::new(rays), hits.to_lanes());
+                let lanes = std::array::from_fn(|i| (active.test(i), rays.lane(i), best[i]));
+                hits = Hits16::from_lanes(k, &self.instances_per_lane::<false, _>(k, &lanes));
+            }
         }
         hits
     }
@@ -231,16 +233,18 @@ impl Accel {
             occluded = occluded | best.found;
         }
         let rest = active.and_not(occluded);
-        if !self.tlas.slots.is_empty() && rest.any() && self.instances_in_lanes() {
-            let mut hits = Hits16::none(k, rays);
-            self.instances16::<true, _>(k, rays, rest, &mut hits);
-            occluded = occluded | hits.found;
-        } else if !self.tlas.slots.is_empty() && rest.any() {
-            let rays = lanes::PlainRays::new(rays);
-            let lanes = std::array::from_fn(|i| (rest.test(i), rays.lane(i), None));
-            let found = self.instances_per_lane::<true, _>(k, &lanes);
-            for (lane, hit) in found.iter().enumerate() {
-                occluded.0 |= u16::from(hit.is_some()) << lane;
+        if !self.tlas.slots.is_empty() && rest.any() {
+            if self.instances_in_lanes() {
+                let mut hits = Hits16::none(k, rays);
+                self.instances16::<true, _>(&lanes, rest, &mut hits);
+                occluded = occluded | hits.found;
+            } else {
+                let rays = lanes::PlainRays::new(rays);
+                let lanes = std::array::from_fn(|i| (rest.test(i), rays.lane(i), None));
+                let found = self.instances_per_lane::<true, _>(k, &lanes);
+                for (lane, hit) in found.iter().enumerate() {
+                    occluded.0 |= u16::from(hit.is_some()) << lane;
+                }
             }
         }
         occluded
