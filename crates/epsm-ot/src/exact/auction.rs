@@ -48,23 +48,75 @@ impl Rows {
     /// Row `i`'s bid at prices `q`: its best column `j₁` and the rise of its
     /// price, the gap to the second-best column plus `eps` (`lone` instead of
     /// the gap when the row has one edge); column `NONE` when it has no edge.
+    ///
+    /// A tie for the best column goes to the earlier edge within one of the
+    /// [`LANES`] interleaved scans, and to the lower column between scans.
     fn bid(&self, i: usize, q: &[f64], eps: f64, lone: f64) -> (u32, f64) {
         let range = self.start[i]..self.start[i + 1];
-        let (mut j1, mut r1, mut r2) = (NONE, f64::INFINITY, f64::INFINITY);
-        // Best and second-best column, written without branches (selects)
-        // so unpredictable comparisons cost no mispredictions.
-        for (&j, &c) in self.cols[range.clone()].iter().zip(&self.costs[range]) {
-            let r = c + q[j as usize];
-            let better = r < r1;
-            r2 = if better { r1 } else { r2.min(r) };
-            j1 = if better { j } else { j1 };
-            r1 = if better { r } else { r1 };
+        let (cols, costs) = (&self.cols[range.clone()], &self.costs[range]);
+        // Best and second-best per lane of LANES independent scans (their
+        // compare chains overlap), written without branches (selects) so
+        // unpredictable comparisons cost no mispredictions; then merged.
+        let mut best = [Best::EMPTY; LANES];
+        let (col_chunks, cost_chunks) = (cols.chunks_exact(LANES), costs.chunks_exact(LANES));
+        let (col_rest, cost_rest) = (col_chunks.remainder(), cost_chunks.remainder());
+        for (cj, cc) in col_chunks.zip(cost_chunks) {
+            for l in 0..LANES {
+                best[l].push(cj[l], cc[l] + q[cj[l] as usize]);
+            }
         }
-        if j1 == NONE {
+        for (l, (&j, &c)) in col_rest.iter().zip(cost_rest).enumerate() {
+            best[l].push(j, c + q[j as usize]);
+        }
+        let b = best.iter().fold(Best::EMPTY, |a, b| a.merge(b));
+        if b.j1 == NONE {
             return (NONE, 0.0);
         }
-        let gap = if r2.is_finite() { r2 - r1 } else { lone };
-        (j1, gap + eps)
+        let gap = if b.r2.is_finite() { b.r2 - b.r1 } else { lone };
+        (b.j1, gap + eps)
+    }
+}
+
+/// Independent scans per bid.
+const LANES: usize = 4;
+
+/// The best column `j1` of a scan, its value `r1` and the second-best value `r2`.
+#[derive(Clone, Copy)]
+struct Best {
+    j1: u32,
+    r1: f64,
+    r2: f64,
+}
+
+impl Best {
+    const EMPTY: Self = Self {
+        j1: NONE,
+        r1: f64::INFINITY,
+        r2: f64::INFINITY,
+    };
+
+    /// Adds column `j` of value `r` (ties for the best to the lower column).
+    #[inline(always)]
+    fn push(&mut self, j: u32, r: f64) {
+        let better = r < self.r1;
+        let low = if r < self.r2 { r } else { self.r2 };
+        self.r2 = if better { self.r1 } else { low };
+        self.j1 = if better { j } else { self.j1 };
+        self.r1 = if better { r } else { self.r1 };
+    }
+
+    /// The best and second best of two scans together.
+    fn merge(self, other: &Self) -> Self {
+        let (win, lose) = if other.r1 < self.r1 || (other.r1 == self.r1 && other.j1 < self.j1) {
+            (*other, self)
+        } else {
+            (self, *other)
+        };
+        Self {
+            j1: win.j1,
+            r1: win.r1,
+            r2: win.r2.min(lose.r1),
+        }
     }
 }
 
