@@ -56,6 +56,9 @@ pub(super) fn finish(
             lsap = SparseAssignment::with_floors(edges, v, floors);
         }
         let augment_start = Instant::now();
+        // Cheap bids first, then one search per row still free.
+        let free = lsap.free_rows().len();
+        lsap.reduce_rows(REDUCTION_BIDS_PER_FREE_ROW * free);
         for i in lsap.free_rows() {
             if !lsap.augment(i) {
                 let full: Vec<(u32, u32, f64)> = (0..n)
@@ -155,6 +158,9 @@ pub(super) fn auction_potentials(
 
 /// Each check adds this many times `candidates` worst violators per row (fewer, costlier rounds otherwise).
 pub(super) const VIOLATORS_PER_CANDIDATE: usize = 4;
+
+/// Bids of the augmenting row reduction (`SparseAssignment::reduce_rows`) per free row.
+const REDUCTION_BIDS_PER_FREE_ROW: usize = 4;
 
 /// The sparse solve re-prices every row by auction when more than `n / REPRICE_BELOW` rows are free.
 const REPRICE_BELOW: usize = 16;
