@@ -8,8 +8,9 @@
 //! - **exact**: the target potentials, the permutation, each source point's
 //!   best candidate targets and the target's clustering (see `exact::warm`).
 //!   The next solve starts its sparse assignment from them, skipping the
-//!   entropic warm start, the candidate search and the auction, and ends with
-//!   the same certificate (dual feasibility over all n² pairs, tightness on
+//!   entropic warm start and the candidate search; its auction starts from
+//!   the kept prices at the small first ε `exact.warm_auction_start`, and it
+//!   ends with the same certificate (dual feasibility over all n² pairs, tightness on
 //!   the matching). Its loss equals the cold solve's to rounding, and its
 //!   permutation differs from the cold one's only among ties (permutations of
 //!   equal cost), whatever the state held: the state only decides how fast.

@@ -11,9 +11,18 @@
 //! a bid raises a price by at least ε, so an ε below the rounding of the
 //! prices raises nothing and the phase runs out of bids.
 //!
+//! The prices are the auction's only output: a row that bid last holds a
+//! column ε above its best, so the finish's greedy start leaves about a
+//! quarter of the rows free, and its augmenting row reduction
+//! (`sparse::SparseAssignment::reduce_rows`) matches most of them with a few
+//! exact bids each.
+//!
 //! The graph is copied into compressed rows first (contiguous edges per row,
 //! columns and costs in separate arrays), which made the auctions of the
 //! 16384-point blobs pairs 10–20 % faster than reading the per-row vectors.
+//! A bid scans its row as four interleaved best/second-best chains merged at
+//! the end, so their compares overlap: a quarter less auction time on the
+//! 16384-point blobs pairs than one chain.
 //!
 //! The bids run on one thread, in a fixed order: a bulk-synchronous variant
 //! (every free row bidding against the same prices, in parallel, conflicts

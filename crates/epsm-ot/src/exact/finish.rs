@@ -1,6 +1,7 @@
-//! Steps 3–4 of the solver (module doc of [`super`]): augmenting paths on
-//! the candidate graph, then optimality checks over all pairs adding the
-//! violated ones, re-pricing by auction when many rows are free.
+//! Steps 3–4 of the solver (module doc of [`super`]): augmenting row
+//! reduction and augmenting paths on the candidate graph, then optimality
+//! checks over all pairs adding the violated ones, re-pricing by auction
+//! when many rows are free.
 
 use std::time::Instant;
 
@@ -46,7 +47,8 @@ pub(super) fn finish(
             // all rows by auction from the current prices, far cheaper than one
             // shortest-augmenting-path search per free row from poor potentials.
             // (Not on the first round: its prices come fresh from an auction, and
-            // the rows its greedy start leaves free are each a short search.)
+            // the rows its greedy start leaves free are matched by the row
+            // reduction or a short search.)
             // The auction only raises prices (lowers v), so the floors stay valid.
             let (edges, v, floors) = lsap.into_parts();
             let (v, finished) = phases.time("auction", || {

@@ -24,9 +24,10 @@
 //!    of costs and prices. (An absolute ε of 1e-9 fell below the rounding of
 //!    prices near 1e30, so at spreads of 1e15 every auction ran out of bids,
 //!    and on the blobs pair already at ×1000, though the exact finish still
-//!    found the optimum.) Then
-//!    shortest augmenting paths make the
-//!    matching exactly complementary-slack with them (`sparse`). Whenever
+//!    found the optimum.) Then an augmenting row reduction (exact bids that
+//!    only lower column potentials) matches most free rows and shortest
+//!    augmenting paths the rest, making the matching exactly
+//!    complementary-slack with the potentials (`sparse`). Whenever
 //!    more than 1/16 of the rows are unmatched (after step 4 added violated
 //!    pairs), the auction first re-prices all rows from the current potentials.
 //! 4. **Optimality check**: a streaming pass over all pairs of the rows whose

@@ -6,6 +6,10 @@
 //! reduced costs (a binary heap, so a search touches only the few columns a
 //! good warm start leaves within reach), after which the potentials of the
 //! scanned columns are shifted so feasibility and tightness still hold.
+//! Before the searches, Jonker–Volgenant's augmenting row reduction
+//! ([`SparseAssignment::reduce_rows`]) matches free rows by exact bids (a
+//! column's potential falls until the bidder's second-best column ties), a
+//! few per row where an auction left the prices.
 //! Edges can be added at any time: an edge that violates feasibility lowers
 //! its row's potential and frees that row for another search. Column
 //! potentials only fall, so each row's floor from the last optimality check
@@ -62,6 +66,16 @@ pub(crate) struct SparseAssignment {
     /// Per row, a lower bound on `c_ij − v_j` over the pairs outside the graph
     /// (`−∞` before its first check; see `check`).
     floors: Vec<f64>,
+    /// The buffers of [`Self::augment`], kept between searches.
+    search: Search,
+}
+
+/// A search's heap, the columns it gave a distance and those it settled.
+#[derive(Debug, Clone, Default)]
+struct Search {
+    heap: BinaryHeap<Entry>,
+    touched: Vec<u32>,
+    scanned: Vec<u32>,
 }
 
 impl SparseAssignment {
@@ -87,6 +101,7 @@ impl SparseAssignment {
             scanned: vec![false; n],
             floors,
             edges,
+            search: Search::default(),
         };
         for i in 0..n {
             let best = s.edges[i]
@@ -238,9 +253,14 @@ impl SparseAssignment {
 
     /// Matches the free row `i0` along a shortest augmenting path; `false` if no free column is reachable.
     pub fn augment(&mut self, i0: usize) -> bool {
-        let mut heap = BinaryHeap::new();
-        let mut touched: Vec<u32> = Vec::new();
-        let mut scanned: Vec<u32> = Vec::new();
+        let Search {
+            mut heap,
+            mut touched,
+            mut scanned,
+        } = std::mem::take(&mut self.search);
+        heap.clear();
+        touched.clear();
+        scanned.clear();
         self.relax(i0, 0.0, &mut heap, &mut touched);
         let mut found = None;
         // Dijkstra over columns until a free one is settled.
@@ -286,6 +306,11 @@ impl SparseAssignment {
             self.dist[j as usize] = f64::INFINITY;
             self.scanned[j as usize] = false;
         }
+        self.search = Search {
+            heap,
+            touched,
+            scanned,
+        };
         found.is_some()
     }
 
