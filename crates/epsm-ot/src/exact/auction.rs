@@ -132,6 +132,13 @@ impl Best {
 /// Runs the auction from prices `q`, raising them in place; `false` if a phase ran out
 /// of its bid budget (a price war, or a graph without a perfect matching).
 ///
+/// A phase whose bids pass [`WAR_BIDS_PER_ROW`] per row, a price war (rows
+/// outbidding each other by ε for columns too few for them), starts again
+/// from the prices it reached at ε raised by `1 / factor²`, up to
+/// `eps_max` and at most [`MAX_RAISES`] times: a war's bids fall with ε,
+/// and the phases that follow bring ε back down. A start near the optimum (a warm solve's kept prices) fights
+/// its wars where the kept prices are far off; the other rows move little.
+///
 /// The prices only rise, and every bid leaves its bidder within ε of its best
 /// column, so the prices reached when the budget runs out are still a better
 /// start for the exact finish than the ones the auction began with.
@@ -140,19 +147,27 @@ pub(crate) fn run(
     q: &mut [f64],
     eps_start: f64,
     eps_end: f64,
+    eps_max: f64,
     factor: f64,
 ) -> bool {
     let n = edges.len();
     let rows = Rows::new(edges);
     let budget = 200 * n + 10_000;
+    let war = WAR_BIDS_PER_ROW * n + 10_000;
+    let mut raises = MAX_RAISES;
     let mut eps = eps_start.max(eps_end);
     let mut owner = vec![NONE; n];
-    loop {
+    'phase: loop {
         owner.fill(NONE);
         let mut queue: Vec<u32> = (0..n as u32).rev().collect();
         let mut bids = 0usize;
         while let Some(i) = queue.pop() {
             bids += 1;
+            if bids > war && eps < eps_max && raises > 0 {
+                raises -= 1;
+                eps = (eps / (factor * factor)).min(eps_max);
+                continue 'phase;
+            }
             // A lone edge: any rise keeps the row on it; the first ε scales with the costs.
             let (j, rise) = rows.bid(i as usize, q, eps, eps_start);
             if bids > budget || j == NONE {
@@ -172,6 +187,13 @@ pub(crate) fn run(
     }
 }
 
+/// Bids per row after which a phase counts as a price war (see [`run`]).
+const WAR_BIDS_PER_ROW: usize = 20;
+
+/// Most raises of ε in one auction (see [`run`]): a war that comes back
+/// after them runs to the phase's budget instead of raising ε again.
+const MAX_RAISES: usize = 2;
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -181,7 +203,7 @@ mod tests {
         // Two rows, two columns, a unique optimum 0 → 0, 1 → 1.
         let edges = vec![vec![(0, 0.0), (1, 1.0)], vec![(0, 0.5), (1, 0.6)]];
         let mut q = vec![0.0; 2];
-        assert!(run(&edges, &mut q, 0.1, 1e-9, 0.2));
+        assert!(run(&edges, &mut q, 0.1, 1e-9, 0.1, 0.2));
         // ε-complementary slackness of the optimum at the final ε.
         assert!(edges[0][0].1 + q[0] <= edges[0][1].1 + q[1] + 1e-9);
         assert!(edges[1][1].1 + q[1] <= edges[1][0].1 + q[0] + 1e-9);
@@ -193,7 +215,31 @@ mod tests {
             vec![(0, 0.2), (1, 5.0), (2, 5.0)],
         ];
         let mut q = vec![0.0; 3];
-        assert!(!run(&edges, &mut q, 0.1, 1e-9, 0.2));
+        assert!(!run(&edges, &mut q, 0.1, 1e-9, 0.1, 0.2));
         assert!(q[0] > 0.0 && q.iter().all(|p| p.is_finite()));
+    }
+
+    #[test]
+    fn a_price_war_raises_eps_up_to_its_ceiling_and_finishes() {
+        // 50 rows want columns 0 and 1 (cost 0); all but two must settle for
+        // their own column at cost 1. At ε = 1e-5 the prices of columns 0 and 1
+        // climb to 1 by about ε per bid: more bids than the budget.
+        let edges: Vec<Vec<(u32, f64)>> = (0..50u32)
+            .map(|i| {
+                let mut row = vec![(0, 0.0), (1, 0.0)];
+                if i >= 2 {
+                    row.push((i, 1.0));
+                }
+                row
+            })
+            .collect();
+        let mut q = vec![0.0; 50];
+        assert!(!run(&edges, &mut q, 1e-5, 1e-9, 1e-5, 0.2));
+        let mut q = vec![0.0; 50];
+        assert!(run(&edges, &mut q, 1e-5, 1e-9, 0.1, 0.2));
+        // Rows 0 and 1 hold columns 0 and 1 (their only edges), the others
+        // their own: ε-complementary slackness at the last ε for those.
+        let cheap = q[0].min(q[1]);
+        assert!((2..50).all(|i| 1.0 + q[i] <= cheap + 1e-8));
     }
 }

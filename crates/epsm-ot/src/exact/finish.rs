@@ -153,6 +153,7 @@ pub(super) fn auction_potentials(
         &mut q,
         auction_start * unit,
         settings.auction_end * unit,
+        settings.auction_start.max(auction_start) * unit,
         0.2,
     );
     (q.iter().map(|&t| -t).collect(), finished)
