@@ -19,7 +19,8 @@
 //!    perfect matching (grid order) so the graph always has one.
 //! 3. **Sparse solve**: an ε-scaling auction from prices `−g` finds near-optimal
 //!    potentials (`auction`; a phase that runs out of its bid budget keeps the
-//!    prices it reached, counted in `SolveStats::auction_budget_stops`). Its ε
+//!    prices it reached, counted in `SolveStats::auction_budget_stops`; a
+//!    phase that turns into a price war starts again at a larger ε). Its ε
 //!    is relative: the settings times the clouds' squared diameter, the scale
 //!    of costs and prices. (An absolute ε of 1e-9 fell below the rounding of
 //!    prices near 1e30, so at spreads of 1e15 every auction ran out of bids,

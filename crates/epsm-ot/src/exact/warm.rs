@@ -10,7 +10,8 @@
 //! completes the graph by one check of all rows with the margin
 //! `exact.warm_check_margin`: each row gets its pairs below or within the
 //! margin of its true minimum, so the auction that follows (from the kept
-//! prices, at the small first ε `exact.warm_auction_start`) and the
+//! prices, at the small first ε `exact.warm_auction_start`, raised where the
+//! kept prices are far enough off to start a price war) and the
 //! augmenting paths see the columns each row may turn to, and the rows'
 //! floors (see `check`) spare most of them the next check. The entropic warm
 //! start and the candidate search are skipped. The previous permutation is a
