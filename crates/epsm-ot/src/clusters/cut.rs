@@ -170,40 +170,18 @@ impl PointCut {
 
     /// [`Self::select`] with the body compiled for `simd`, or the portable one if the running CPU lacks it.
     fn select_with(&self, simd: Simd, x: &Point, limit: f32, out: &mut Selection) -> bool {
-        match simd {
-            #[cfg(target_arch = "x86_64")]
-            #[allow(unsafe_code)]
-            // SAFETY: `select_avx512` only requires the four AVX-512 subsets it is
-            // compiled for, which the guard detected on the running CPU; it is the same
-            // safe code as `select_portable`.
-            Simd::Avx512 if simd.available() => unsafe { self.select_avx512(x, limit, out) },
-            #[cfg(target_arch = "x86_64")]
-            #[allow(unsafe_code)]
-            // SAFETY: `select_avx2` only requires AVX2 and FMA, which the guard detected
-            // on the running CPU; it is the same safe code as `select_portable`.
-            Simd::Avx2 if simd.available() => unsafe { self.select_avx2(x, limit, out) },
-            _ => self.select_portable(x, limit, out),
-        }
+        simd.run(
+            #[inline(always)]
+            |_| self.select_portable(x, limit, out),
+        );
         !out.ranges.is_empty()
-    }
-
-    /// [`Self::select_portable`] compiled for AVX-512 (selected at run time).
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f,avx512bw,avx512dq,avx512vl")]
-    fn select_avx512(&self, x: &Point, limit: f32, out: &mut Selection) {
-        self.select_portable(x, limit, out);
-    }
-
-    /// [`Self::select_portable`] compiled for AVX2 (selected at run time).
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,fma")]
-    fn select_avx2(&self, x: &Point, limit: f32, out: &mut Selection) {
-        self.select_portable(x, limit, out);
     }
 
     /// The body of [`Self::select`]: a vectorisable test, then a branch-free compaction.
     #[inline(always)]
     fn select_portable(&self, x: &Point, limit: f32, out: &mut Selection) {
+        // A copy, kept in registers (see `softmin::stream_portable`).
+        let x = &{ *x };
         let n = self.ranges.len();
         out.keep.resize(n, false);
         let keep = &mut out.keep[..n];
