@@ -49,6 +49,23 @@ pub(crate) struct PointCut {
     ranges: Vec<Range<usize>>,
     /// Bit `k`: block `k` starts where block `k − 1` ends (layout of [`Selection`]'s bits).
     continues: Vec<u64>,
+    /// Every column's entry per block, for [`Self::subset_into`] (filled by
+    /// [`Self::gather`]; a subset leaves it empty).
+    records: Vec<Record>,
+}
+
+/// One block's entries of a [`PointCut`]'s columns, together so a list of blocks is
+/// copied out of a whole table one block at a time.
+#[derive(Debug, Clone, Copy, Default)]
+struct Record {
+    half_slope: [f32; DIM],
+    lo: Point,
+    hi: Point,
+    offset: f32,
+    slack: f32,
+    centroid: [f32; DIM],
+    radius: f32,
+    ball_offset: f32,
 }
 
 /// What [`PointCut::select`] kept for one point.
@@ -117,6 +134,7 @@ impl PointCut {
             slack: with(),
             ranges: Vec::with_capacity(list.len()),
             continues: vec![0; list.len().div_ceil(64)],
+            records: Vec::with_capacity(list.len()),
         };
         for &j in list {
             let (c, fit) = (&clustered.clusters[j as usize], &fits[j as usize]);
@@ -142,6 +160,18 @@ impl PointCut {
             cut.offset.push(offset as f32);
             cut.slack
                 .push((f64::from(CUT_ROUNDING) * (slope_sq + offset.abs())) as f32);
+            let k = cut.offset.len() - 1;
+            let ball = bound == Bound::Ball;
+            cut.records.push(Record {
+                half_slope: std::array::from_fn(|d| cut.half_slope[d][k]),
+                lo: c.lo,
+                hi: c.hi,
+                offset: cut.offset[k],
+                slack: cut.slack[k],
+                centroid: std::array::from_fn(|d| if ball { cut.centroid[d][k] } else { 0.0 }),
+                radius: if ball { cut.radius[k] } else { 0.0 },
+                ball_offset: if ball { cut.ball_offset[k] } else { 0.0 },
+            });
             let k = cut.ranges.len();
             if cut.ranges.last().is_some_and(|r| r.end == c.range.start) {
                 cut.continues[k / 64] |= 1 << (k % 64);
@@ -155,38 +185,48 @@ impl PointCut {
     /// are reused): a pass gathers every block's bound once ([`Self::gather`] over all
     /// blocks) and each source block copies the ones it lists.
     pub fn subset_into(&self, list: &[u32], out: &mut Self) {
-        fn copy(from: &[f32], list: &[u32], to: &mut Vec<f32>) {
-            to.clear();
-            to.resize(list.len(), 0.0);
-            for (t, &j) in to.iter_mut().zip(list) {
-                *t = from[j as usize];
-            }
+        /// `v` cleared and refilled with `len` zeros, as a slice.
+        fn sized(v: &mut Vec<f32>, len: usize) -> &mut [f32] {
+            v.clear();
+            v.resize(len, 0.0);
+            v
         }
+        let n = list.len();
         out.bound = self.bound;
         let ball = self.bound == Bound::Ball;
-        for d in 0..DIM {
-            copy(&self.half_slope[d], list, &mut out.half_slope[d]);
-            copy(&self.lo[d], list, &mut out.lo[d]);
-            copy(&self.hi[d], list, &mut out.hi[d]);
-            out.centroid[d].clear();
+        let ball_n = if ball { n } else { 0 };
+        let half = out.half_slope.each_mut().map(|v| sized(v, n));
+        let lo = out.lo.each_mut().map(|v| sized(v, n));
+        let hi = out.hi.each_mut().map(|v| sized(v, n));
+        let (offset, slack) = (sized(&mut out.offset, n), sized(&mut out.slack, n));
+        let mut centroid = out.centroid.each_mut().map(|v| sized(v, ball_n));
+        let radius = sized(&mut out.radius, ball_n);
+        let ball_offset = sized(&mut out.ball_offset, ball_n);
+        // One record per listed block: its columns' entries side by side.
+        for (k, &j) in list.iter().enumerate() {
+            let r = &self.records[j as usize];
+            for d in 0..DIM {
+                half[d][k] = r.half_slope[d];
+                lo[d][k] = r.lo[d];
+                hi[d][k] = r.hi[d];
+            }
+            offset[k] = r.offset;
+            slack[k] = r.slack;
             if ball {
-                copy(&self.centroid[d], list, &mut out.centroid[d]);
+                for (column, &v) in centroid.iter_mut().zip(&r.centroid) {
+                    column[k] = v;
+                }
+                radius[k] = r.radius;
+                ball_offset[k] = r.ball_offset;
             }
         }
-        copy(&self.offset, list, &mut out.offset);
-        copy(&self.slack, list, &mut out.slack);
-        out.radius.clear();
-        out.ball_offset.clear();
-        if ball {
-            copy(&self.radius, list, &mut out.radius);
-            copy(&self.ball_offset, list, &mut out.ball_offset);
-        }
+        out.records.clear();
         out.ranges.clear();
         out.ranges
             .extend(list.iter().map(|&j| self.ranges[j as usize].clone()));
         out.continues.clear();
-        out.continues.resize(list.len().div_ceil(64), 0);
-        for k in 1..list.len() {
+        out.continues.resize(n.div_ceil(64), 0);
+        for k in 1..n {
             if out.ranges[k - 1].end == out.ranges[k].start {
                 out.continues[k / 64] |= 1 << (k % 64);
             }
@@ -473,7 +513,9 @@ mod tests {
         let mut out = PointCut::default();
         for bound in [Bound::Box, Bound::Ball] {
             PointCut::gather(&y, &fits, &all, bound).subset_into(&list, &mut out);
-            let direct = PointCut::gather(&y, &fits, &list, bound);
+            let mut direct = PointCut::gather(&y, &fits, &list, bound);
+            // A subset keeps no records of its own.
+            direct.records.clear();
             assert_eq!(format!("{out:?}"), format!("{direct:?}"), "{bound:?}");
         }
     }
