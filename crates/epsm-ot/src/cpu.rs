@@ -8,6 +8,13 @@
 //! has. [`force_simd`] pins one (for benchmarks: `epsm bench ot --simd`);
 //! every body computes the same operations in the same order, so results
 //! agree to rounding whichever runs.
+//!
+//! A kernel is one portable body (plain loops over `f32` slices, every helper
+//! `#[inline(always)]`) entered through [`Simd::run`], which calls it inside a
+//! function compiled with the instruction set's features, so the compiler
+//! vectorises the inlined body for those registers. A closure is compiled as a
+//! function of its own, without the caller's features, so the closure passed
+//! to `run` is `#[inline(always)]`.
 
 use std::sync::atomic::{AtomicU8, Ordering};
 
@@ -61,6 +68,45 @@ impl Simd {
     /// The instruction sets the running CPU supports, widest first (always ends with `Portable`).
     pub fn supported() -> Vec<Simd> {
         Self::ALL.into_iter().filter(|s| s.available()).collect()
+    }
+
+    /// Runs `f` compiled for this instruction set, or for the baseline where the running
+    /// CPU lacks it; `f` receives the instruction set it runs with (a constant once
+    /// inlined, so a body can pick its chunk width by it).
+    ///
+    /// `f` must be an `#[inline(always)]` closure (`simd.run(#[inline(always)] |s| ...)`):
+    /// only inlined into the feature-enabled function is it compiled with its features.
+    #[inline(always)]
+    pub(crate) fn run<R>(self, f: impl FnOnce(Simd) -> R) -> R {
+        match self {
+            #[cfg(target_arch = "x86_64")]
+            Self::Avx512 if self.available() => {
+                #[target_feature(enable = "avx512f,avx512bw,avx512dq,avx512vl")]
+                fn run<R>(f: impl FnOnce(Simd) -> R) -> R {
+                    f(Simd::Avx512)
+                }
+                #[allow(unsafe_code)]
+                // SAFETY: `run` requires only the four AVX-512 subsets it enables, which
+                // the guard detected on the running CPU; `f` is safe code.
+                unsafe {
+                    run(f)
+                }
+            }
+            #[cfg(target_arch = "x86_64")]
+            Self::Avx2 if self.available() => {
+                #[target_feature(enable = "avx2,fma")]
+                fn run<R>(f: impl FnOnce(Simd) -> R) -> R {
+                    f(Simd::Avx2)
+                }
+                #[allow(unsafe_code)]
+                // SAFETY: `run` requires only AVX2 and FMA, which the guard detected on
+                // the running CPU; `f` is safe code.
+                unsafe {
+                    run(f)
+                }
+            }
+            _ => f(Simd::Portable),
+        }
     }
 }
 

@@ -92,6 +92,7 @@ impl PointCloud {
     }
 
     /// The `i`-th point. Panics if `i >= len()`.
+    #[inline]
     pub fn point(&self, i: usize) -> Point {
         std::array::from_fn(|d| self.columns[d][i])
     }

@@ -49,13 +49,30 @@ pub(crate) struct PointCut {
     ranges: Vec<Range<usize>>,
     /// Bit `k`: block `k` starts where block `k − 1` ends (layout of [`Selection`]'s bits).
     continues: Vec<u64>,
+    /// Every column's entry per block, for [`Self::subset_into`] (filled by
+    /// [`Self::gather`]; a subset leaves it empty).
+    records: Vec<Record>,
+}
+
+/// One block's entries of a [`PointCut`]'s columns, together so a list of blocks is
+/// copied out of a whole table one block at a time.
+#[derive(Debug, Clone, Copy, Default)]
+struct Record {
+    half_slope: [f32; DIM],
+    lo: Point,
+    hi: Point,
+    offset: f32,
+    slack: f32,
+    centroid: [f32; DIM],
+    radius: f32,
+    ball_offset: f32,
 }
 
 /// What [`PointCut::select`] kept for one point.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Selection {
-    /// Scratch: whether each block of the list is kept.
-    keep: Vec<bool>,
+    /// Scratch: whether each block of the list is kept (0 or 1), zero-padded to a multiple of 64.
+    keep: Vec<u8>,
     /// Bit `k % 64` of word `k / 64`: block `k` of the list is kept.
     bits: Vec<u64>,
     /// The kept blocks' ranges, consecutive blocks merged.
@@ -63,43 +80,37 @@ pub(crate) struct Selection {
 }
 
 impl Selection {
-    /// Every one of `n` blocks kept, whose merged ranges are `ranges`.
-    pub fn all(n: usize, ranges: Vec<Range<usize>>) -> Self {
-        let mut bits = vec![u64::MAX; n / 64];
+    /// Every block of `list` kept (`ranges`: every block's range), reusing the buffers.
+    pub fn set_all(&mut self, ranges: &[Range<usize>], list: &[u32]) {
+        let n = list.len();
+        self.bits.clear();
+        self.bits.resize(n / 64, u64::MAX);
         if !n.is_multiple_of(64) {
-            bits.push((1u64 << (n % 64)) - 1);
+            self.bits.push((1u64 << (n % 64)) - 1);
         }
-        Self {
-            keep: Vec::new(),
-            bits,
-            ranges,
+        self.ranges.clear();
+        for &j in list {
+            push_merged(&mut self.ranges, ranges[j as usize].clone());
         }
     }
 
-    /// Positions in the list of the kept blocks, in increasing order.
-    pub fn kept(&self) -> impl Iterator<Item = usize> + '_ {
-        set_bits(&self.bits)
+    /// Positions in the list of the kept blocks, in increasing order, into `out` (cleared first).
+    pub fn kept_into(&self, out: &mut Vec<usize>) {
+        out.clear();
+        for (w, &word) in self.bits.iter().enumerate() {
+            let mut rest = word;
+            while rest != 0 {
+                out.push(64 * w + rest.trailing_zeros() as usize);
+                rest &= rest - 1;
+            }
+        }
     }
-}
 
-/// Positions of the set bits of a bit vector, in increasing order.
-fn set_bits(words: &[u64]) -> impl Iterator<Item = usize> + '_ {
-    words
-        .iter()
-        .enumerate()
-        .flat_map(|(w, &word)| word_bits(w, word))
-}
-
-/// Positions of the set bits of `word`, the `w`-th word of a bit vector, in increasing order.
-fn word_bits(w: usize, word: u64) -> impl Iterator<Item = usize> {
-    let mut rest = word;
-    std::iter::from_fn(move || {
-        (rest != 0).then(|| {
-            let k = rest.trailing_zeros() as usize;
-            rest &= rest - 1;
-            64 * w + k
-        })
-    })
+    /// Makes this selection a copy of `other`, reusing its buffers.
+    pub fn copy_from(&mut self, other: &Self) {
+        self.bits.clone_from(&other.bits);
+        self.ranges.clone_from(&other.ranges);
+    }
 }
 
 impl PointCut {
@@ -123,6 +134,7 @@ impl PointCut {
             slack: with(),
             ranges: Vec::with_capacity(list.len()),
             continues: vec![0; list.len().div_ceil(64)],
+            records: Vec::with_capacity(list.len()),
         };
         for &j in list {
             let (c, fit) = (&clustered.clusters[j as usize], &fits[j as usize]);
@@ -148,6 +160,18 @@ impl PointCut {
             cut.offset.push(offset as f32);
             cut.slack
                 .push((f64::from(CUT_ROUNDING) * (slope_sq + offset.abs())) as f32);
+            let k = cut.offset.len() - 1;
+            let ball = bound == Bound::Ball;
+            cut.records.push(Record {
+                half_slope: std::array::from_fn(|d| cut.half_slope[d][k]),
+                lo: c.lo,
+                hi: c.hi,
+                offset: cut.offset[k],
+                slack: cut.slack[k],
+                centroid: std::array::from_fn(|d| if ball { cut.centroid[d][k] } else { 0.0 }),
+                radius: if ball { cut.radius[k] } else { 0.0 },
+                ball_offset: if ball { cut.ball_offset[k] } else { 0.0 },
+            });
             let k = cut.ranges.len();
             if cut.ranges.last().is_some_and(|r| r.end == c.range.start) {
                 cut.continues[k / 64] |= 1 << (k % 64);
@@ -155,6 +179,58 @@ impl PointCut {
             cut.ranges.push(c.range.clone());
         }
         cut
+    }
+
+    /// The blocks at positions `list` of this cut, in that order, into `out` (whose buffers
+    /// are reused): a pass gathers every block's bound once ([`Self::gather`] over all
+    /// blocks) and each source block copies the ones it lists.
+    pub fn subset_into(&self, list: &[u32], out: &mut Self) {
+        /// `v` cleared and refilled with `len` zeros, as a slice.
+        fn sized(v: &mut Vec<f32>, len: usize) -> &mut [f32] {
+            v.clear();
+            v.resize(len, 0.0);
+            v
+        }
+        let n = list.len();
+        out.bound = self.bound;
+        let ball = self.bound == Bound::Ball;
+        let ball_n = if ball { n } else { 0 };
+        let half = out.half_slope.each_mut().map(|v| sized(v, n));
+        let lo = out.lo.each_mut().map(|v| sized(v, n));
+        let hi = out.hi.each_mut().map(|v| sized(v, n));
+        let (offset, slack) = (sized(&mut out.offset, n), sized(&mut out.slack, n));
+        let mut centroid = out.centroid.each_mut().map(|v| sized(v, ball_n));
+        let radius = sized(&mut out.radius, ball_n);
+        let ball_offset = sized(&mut out.ball_offset, ball_n);
+        // One record per listed block: its columns' entries side by side.
+        for (k, &j) in list.iter().enumerate() {
+            let r = &self.records[j as usize];
+            for d in 0..DIM {
+                half[d][k] = r.half_slope[d];
+                lo[d][k] = r.lo[d];
+                hi[d][k] = r.hi[d];
+            }
+            offset[k] = r.offset;
+            slack[k] = r.slack;
+            if ball {
+                for (column, &v) in centroid.iter_mut().zip(&r.centroid) {
+                    column[k] = v;
+                }
+                radius[k] = r.radius;
+                ball_offset[k] = r.ball_offset;
+            }
+        }
+        out.records.clear();
+        out.ranges.clear();
+        out.ranges
+            .extend(list.iter().map(|&j| self.ranges[j as usize].clone()));
+        out.continues.clear();
+        out.continues.resize(n.div_ceil(64), 0);
+        for k in 1..n {
+            if out.ranges[k - 1].end == out.ranges[k].start {
+                out.continues[k / 64] |= 1 << (k % 64);
+            }
+        }
     }
 
     /// Keeps the blocks whose bound on `c(x, y_j) − g_j` may be at most `limit`, and
@@ -170,43 +246,22 @@ impl PointCut {
 
     /// [`Self::select`] with the body compiled for `simd`, or the portable one if the running CPU lacks it.
     fn select_with(&self, simd: Simd, x: &Point, limit: f32, out: &mut Selection) -> bool {
-        match simd {
-            #[cfg(target_arch = "x86_64")]
-            #[allow(unsafe_code)]
-            // SAFETY: `select_avx512` only requires the four AVX-512 subsets it is
-            // compiled for, which the guard detected on the running CPU; it is the same
-            // safe code as `select_portable`.
-            Simd::Avx512 if simd.available() => unsafe { self.select_avx512(x, limit, out) },
-            #[cfg(target_arch = "x86_64")]
-            #[allow(unsafe_code)]
-            // SAFETY: `select_avx2` only requires AVX2 and FMA, which the guard detected
-            // on the running CPU; it is the same safe code as `select_portable`.
-            Simd::Avx2 if simd.available() => unsafe { self.select_avx2(x, limit, out) },
-            _ => self.select_portable(x, limit, out),
-        }
+        simd.run(
+            #[inline(always)]
+            |_| self.select_portable(x, limit, out),
+        );
         !out.ranges.is_empty()
-    }
-
-    /// [`Self::select_portable`] compiled for AVX-512 (selected at run time).
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f,avx512bw,avx512dq,avx512vl")]
-    fn select_avx512(&self, x: &Point, limit: f32, out: &mut Selection) {
-        self.select_portable(x, limit, out);
-    }
-
-    /// [`Self::select_portable`] compiled for AVX2 (selected at run time).
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,fma")]
-    fn select_avx2(&self, x: &Point, limit: f32, out: &mut Selection) {
-        self.select_portable(x, limit, out);
     }
 
     /// The body of [`Self::select`]: a vectorisable test, then a branch-free compaction.
     #[inline(always)]
     fn select_portable(&self, x: &Point, limit: f32, out: &mut Selection) {
+        // A copy, kept in registers (see `softmin::stream_portable`).
+        let x = &{ *x };
         let n = self.ranges.len();
-        out.keep.resize(n, false);
-        let keep = &mut out.keep[..n];
+        out.keep.resize(n.next_multiple_of(64), 0);
+        let (keep, pad) = out.keep.split_at_mut(n);
+        pad.fill(0);
         match self.bound {
             Bound::Box => self.box_test(x, limit, keep),
             Bound::Ball => self.ball_test(x, limit, keep),
@@ -214,34 +269,37 @@ impl PointCut {
         // Bit masks: a kept block opens a range unless it joins the previous kept block
         // (continues it), and closes it unless the next block joins it.
         out.bits.clear();
-        out.bits.extend(keep.chunks(64).map(|chunk| {
-            let mut word = 0u64;
-            for (k, &v) in chunk.iter().enumerate() {
-                word |= u64::from(v) << k;
-            }
-            word
-        }));
+        out.bits.extend(out.keep.chunks_exact(64).map(pack_word));
         let words = &out.bits;
         let joins = |w: usize| {
             let previous = (words[w] << 1) | if w > 0 { words[w - 1] >> 63 } else { 0 };
             words[w] & previous & self.continues[w]
         };
-        let opens = |w: usize| words[w] & !joins(w);
-        let closes = |w: usize| {
-            let joined = (joins(w) >> 1)
-                | if w + 1 < words.len() {
-                    joins(w + 1) << 63
-                } else {
-                    0
-                };
-            words[w] & !joined
-        };
-        out.ranges.clear();
-        let starts = (0..words.len()).flat_map(|w| word_bits(w, opens(w)));
-        out.ranges.extend(starts.map(|k| self.ranges[k].start..0));
-        let ends = (0..words.len()).flat_map(|w| word_bits(w, closes(w)));
-        for (r, k) in out.ranges.iter_mut().zip(ends) {
-            r.end = self.ranges[k].end;
+        // Plain loops over the set bits: iterator adapters here were calls per range.
+        let ranges = &mut out.ranges;
+        ranges.clear();
+        for (w, &word) in words.iter().enumerate() {
+            let mut opens = word & !joins(w);
+            while opens != 0 {
+                let k = 64 * w + opens.trailing_zeros() as usize;
+                opens &= opens - 1;
+                ranges.push(self.ranges[k].start..0);
+            }
+        }
+        let mut r = 0;
+        for w in 0..words.len() {
+            let next = if w + 1 < words.len() {
+                joins(w + 1) << 63
+            } else {
+                0
+            };
+            let mut closes = words[w] & !((joins(w) >> 1) | next);
+            while closes != 0 {
+                let k = 64 * w + closes.trailing_zeros() as usize;
+                closes &= closes - 1;
+                ranges[r].end = self.ranges[k].end;
+                r += 1;
+            }
         }
     }
 }
@@ -249,7 +307,7 @@ impl PointCut {
 impl PointCut {
     /// The box bound of every block for the point `x` into `keep` (see [`Self::select`]).
     #[inline(always)]
-    fn box_test(&self, x: &Point, limit: f32, keep: &mut [bool]) {
+    fn box_test(&self, x: &Point, limit: f32, keep: &mut [u8]) {
         let n = keep.len();
         let [h0, h1, h2, h3, h4] = &self.half_slope;
         let (h0, h1, h2, h3, h4) = (&h0[..n], &h1[..n], &h2[..n], &h3[..n], &h4[..n]);
@@ -284,13 +342,14 @@ impl PointCut {
                 + gap[3] * gap[3]
                 + gap[4] * gap[4];
             let hx = h0[k] * x[0] + h1[k] * x[1] + h2[k] * x[2] + h3[k] * x[3] + h4[k] * x[4];
-            keep[k] = gg - 2.0 * hx - offset[k] <= bar + CUT_ROUNDING * gg + block_slack[k];
+            keep[k] =
+                u8::from(gg - 2.0 * hx - offset[k] <= bar + CUT_ROUNDING * gg + block_slack[k]);
         }
     }
 
     /// The ball bound of every block for the point `x` into `keep` (see [`Self::select`]).
     #[inline(always)]
-    fn ball_test(&self, x: &Point, limit: f32, keep: &mut [bool]) {
+    fn ball_test(&self, x: &Point, limit: f32, keep: &mut [u8]) {
         let n = keep.len();
         let [c0, c1, c2, c3, c4] = &self.centroid;
         let (c0, c1, c2, c3, c4) = (&c0[..n], &c1[..n], &c2[..n], &c3[..n], &c4[..n]);
@@ -317,9 +376,25 @@ impl PointCut {
             let tt = t[0] * t[0] + t[1] * t[1] + t[2] * t[2] + t[3] * t[3] + t[4] * t[4];
             let tilt = tt.sqrt() * radius[k];
             let slack = CUT_ROUNDING * (dd + tilt + offset[k].abs() + limit.abs());
-            keep[k] = dd - tilt - offset[k] <= limit + slack;
+            keep[k] = u8::from(dd - tilt - offset[k] <= limit + slack);
         }
     }
+}
+
+/// Bit `k` set iff byte `k` of a 64-byte chunk of 0/1 flags is 1.
+///
+/// Eight flags at a time: the multiplication moves byte `b`'s low bit to bit `56 + b`
+/// (the partial products never overlap, so nothing carries into the top byte).
+#[inline(always)]
+fn pack_word(chunk: &[u8]) -> u64 {
+    const GATHER: u64 = 0x0102_0408_1020_4080;
+    let mut word = 0u64;
+    for (b, eight) in chunk.chunks_exact(8).enumerate() {
+        let mut bytes = [0u8; 8];
+        bytes.copy_from_slice(eight);
+        word |= (u64::from_le_bytes(bytes).wrapping_mul(GATHER) >> 56) << (8 * b);
+    }
+    word
 }
 
 /// Distance from `p` to the interval `[lo, hi]` along one axis, as comparisons and selects
@@ -332,7 +407,7 @@ fn box_gap(lo: f32, hi: f32, p: f32) -> f32 {
 }
 
 /// Appends `r` to `out`, extending the last range instead if `r` continues it.
-pub(crate) fn push_merged(out: &mut Vec<Range<usize>>, r: Range<usize>) {
+fn push_merged(out: &mut Vec<Range<usize>>, r: Range<usize>) {
     match out.last_mut() {
         Some(last) if last.end == r.start => last.end = r.end,
         _ => out.push(r),
@@ -379,7 +454,8 @@ mod tests {
             let bodies = Simd::supported();
             let body = bodies[(i / 7) % bodies.len()];
             cut.select_with(body, &p, limit as f32, &mut selection);
-            let chosen: Vec<usize> = selection.kept().collect();
+            let mut chosen = Vec::new();
+            selection.kept_into(&mut chosen);
             for &other in &bodies {
                 let mut again = Selection::default();
                 cut.select_with(other, &p, limit as f32, &mut again);
@@ -407,6 +483,41 @@ mod tests {
             !drops || kept * 4 < total,
             "vacuous: {kept} of {total} blocks kept"
         );
+    }
+
+    #[test]
+    fn packed_words_hold_each_flag_in_its_bit() {
+        let mut rng = Rng::new(3);
+        for _ in 0..200 {
+            let flags: Vec<u8> = (0..64).map(|_| u8::from(rng.uniform() < 0.5)).collect();
+            let want = flags
+                .iter()
+                .enumerate()
+                .fold(0u64, |w, (k, &f)| w | (u64::from(f) << k));
+            assert_eq!(pack_word(&flags), want);
+        }
+        assert_eq!(pack_word(&[1; 64]), u64::MAX);
+        assert_eq!(pack_word(&[0; 64]), 0);
+    }
+
+    #[test]
+    fn a_subset_of_the_whole_cut_is_the_cut_of_the_list() {
+        let (_, t) = blobs_pair(1024, 3).unwrap_or_else(|| panic!("fixture"));
+        let y = Clustered::new(&t, 16);
+        let g: Vec<f64> = (0..t.len())
+            .map(|j| 0.2 * f64::from(t.point(j)[4]))
+            .collect();
+        let fits = fit_potentials(&y, &g);
+        let all: Vec<u32> = (0..y.clusters.len() as u32).collect();
+        let list: Vec<u32> = all.iter().copied().filter(|j| j % 3 != 1).collect();
+        let mut out = PointCut::default();
+        for bound in [Bound::Box, Bound::Ball] {
+            PointCut::gather(&y, &fits, &all, bound).subset_into(&list, &mut out);
+            let mut direct = PointCut::gather(&y, &fits, &list, bound);
+            // A subset keeps no records of its own.
+            direct.records.clear();
+            assert_eq!(format!("{out:?}"), format!("{direct:?}"), "{bound:?}");
+        }
     }
 
     #[test]

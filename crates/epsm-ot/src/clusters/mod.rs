@@ -47,7 +47,7 @@ use rayon::prelude::*;
 
 use crate::points::{DIM, Point, PointCloud};
 pub(crate) use bounds::{Support, kept_targets, pair_bound};
-pub(crate) use cut::{Bound, PointCut, Selection, push_merged};
+pub(crate) use cut::{Bound, PointCut, Selection};
 
 /// A contiguous run of points of a reordered cloud with its centroid and radius.
 #[derive(Debug, Clone, PartialEq)]

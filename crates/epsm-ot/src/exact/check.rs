@@ -225,48 +225,10 @@ fn screened_block(
     block: std::ops::Range<usize>,
     out: &mut [f32],
 ) {
-    match simd {
-        #[cfg(target_arch = "x86_64")]
-        #[allow(unsafe_code)]
-        // SAFETY: `screened_avx512` only requires the four AVX-512 subsets it is
-        // compiled for, which the guard detected on the running CPU; it is the same
-        // safe code as `screened_portable`.
-        Simd::Avx512 if simd.available() => unsafe { screened_avx512(p, u, cols, v, block, out) },
-        #[cfg(target_arch = "x86_64")]
-        #[allow(unsafe_code)]
-        // SAFETY: `screened_avx2` only requires AVX2 and FMA, which the guard detected
-        // on the running CPU; it is the same safe code as `screened_portable`.
-        Simd::Avx2 if simd.available() => unsafe { screened_avx2(p, u, cols, v, block, out) },
-        _ => screened_portable(p, u, cols, v, block, out),
-    }
-}
-
-/// [`screened_portable`] compiled for AVX-512 (selected at run time).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx512bw,avx512dq,avx512vl")]
-fn screened_avx512(
-    p: &crate::Point,
-    u: f32,
-    cols: &[Vec<f32>; crate::DIM],
-    v: &[f32],
-    block: std::ops::Range<usize>,
-    out: &mut [f32],
-) {
-    screened_portable(p, u, cols, v, block, out);
-}
-
-/// [`screened_portable`] compiled for AVX2 (selected at run time).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-fn screened_avx2(
-    p: &crate::Point,
-    u: f32,
-    cols: &[Vec<f32>; crate::DIM],
-    v: &[f32],
-    block: std::ops::Range<usize>,
-    out: &mut [f32],
-) {
-    screened_portable(p, u, cols, v, block, out);
+    simd.run(
+        #[inline(always)]
+        |_| screened_portable(p, u, cols, v, block, out),
+    );
 }
 
 /// The body of [`screened_block`].

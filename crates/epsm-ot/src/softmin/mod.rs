@@ -149,7 +149,8 @@ fn stream<const MOMENTS: bool>(
     stream_with::<MOMENTS>(active_simd(), x, y, lw, g, inv_eps, ranges, sink)
 }
 
-/// Runs the body compiled for `simd`, or the portable one if the running CPU lacks it.
+/// Runs the body compiled for `simd`, or the portable one if the running CPU lacks it,
+/// scoring in chunks of one register (AVX2, AVX-512) or two ([`PORTABLE_CHUNK`], SSE2).
 #[allow(clippy::too_many_arguments)]
 fn stream_with<const MOMENTS: bool>(
     simd: Simd,
@@ -161,55 +162,16 @@ fn stream_with<const MOMENTS: bool>(
     ranges: &[Range<usize>],
     sink: Sink,
 ) -> u64 {
-    match simd {
-        #[cfg(target_arch = "x86_64")]
-        #[allow(unsafe_code)]
-        // SAFETY: `stream_avx512` only requires the four AVX-512 subsets it is
-        // compiled for, which the guard detected on the running CPU; it has no other
-        // precondition (it is the same safe code compiled for 512-bit registers).
-        Simd::Avx512 if simd.available() => unsafe {
-            stream_avx512::<MOMENTS>(x, y, lw, g, inv_eps, ranges, sink)
+    simd.run(
+        #[inline(always)]
+        |simd| match simd {
+            Simd::Avx512 => stream_portable::<MOMENTS, 16>(x, y, lw, g, inv_eps, ranges, sink),
+            Simd::Avx2 => stream_portable::<MOMENTS, 8>(x, y, lw, g, inv_eps, ranges, sink),
+            Simd::Portable => {
+                stream_portable::<MOMENTS, PORTABLE_CHUNK>(x, y, lw, g, inv_eps, ranges, sink)
+            }
         },
-        #[cfg(target_arch = "x86_64")]
-        #[allow(unsafe_code)]
-        // SAFETY: `stream_avx2` only requires AVX2 and FMA, which the guard detected
-        // on the running CPU; it has no other precondition (it is the same safe code
-        // compiled for 256-bit registers).
-        Simd::Avx2 if simd.available() => unsafe {
-            stream_avx2::<MOMENTS>(x, y, lw, g, inv_eps, ranges, sink)
-        },
-        _ => stream_portable::<MOMENTS, PORTABLE_CHUNK>(x, y, lw, g, inv_eps, ranges, sink),
-    }
-}
-
-/// [`stream_portable`] compiled for 512-bit AVX-512 registers (selected at run time).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx512bw,avx512dq,avx512vl")]
-fn stream_avx512<const MOMENTS: bool>(
-    x: &Point,
-    y: &[Vec<f32>; DIM],
-    lw: &[f32],
-    g: &[f32],
-    inv_eps: f32,
-    ranges: &[Range<usize>],
-    sink: Sink,
-) -> u64 {
-    stream_portable::<MOMENTS, 16>(x, y, lw, g, inv_eps, ranges, sink)
-}
-
-/// [`stream_portable`] compiled for 256-bit AVX2 registers (selected at run time).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-fn stream_avx2<const MOMENTS: bool>(
-    x: &Point,
-    y: &[Vec<f32>; DIM],
-    lw: &[f32],
-    g: &[f32],
-    inv_eps: f32,
-    ranges: &[Range<usize>],
-    sink: Sink,
-) -> u64 {
-    stream_portable::<MOMENTS, 8>(x, y, lw, g, inv_eps, ranges, sink)
+    )
 }
 
 /// Lanes per chunk of scores in the portable body (two 128-bit SSE2 registers).
@@ -235,6 +197,9 @@ fn stream_portable<const MOMENTS: bool, const W: usize>(
     };
     // Plain loops, no closures or iterator adapters: those are separate generic
     // functions that would not inherit the caller's SIMD target features.
+    // The point is copied: read through the reference captured by `Simd::run`'s
+    // closure, it would be loaded and broadcast again for every range.
+    let x = &{ *x };
     let mut pairs = 0;
     match sink {
         Sink::Row(acc) if !MOMENTS => {

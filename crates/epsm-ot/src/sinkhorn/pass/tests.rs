@@ -17,12 +17,15 @@ fn a_point_that_keeps_nothing_streams_every_block() {
         own: &own,
         threshold: 0.0,
     };
-    let fitted = Fitted::new(&y, &vec![0.0; t.len()], Some(cut));
     let list: Vec<u32> = (0..cy.clusters.len() as u32).collect();
     for bound in [Bound::Box, Bound::Ball] {
-        let mut targets = Targets::new(&y, &list, fitted.as_ref(), bound);
-        targets.point(0, &cx.cloud.point(0));
-        assert_eq!(targets.kept().count(), list.len());
+        let fitted = Fitted::new(&y, &vec![0.0; t.len()], Some(cut), bound);
+        let mut targets = Targets::default();
+        targets.load(&y, &list, fitted.as_ref());
+        targets.point(fitted.as_ref(), 0, &cx.cloud.point(0));
+        let mut kept = Vec::new();
+        targets.kept_into(&mut kept);
+        assert_eq!(kept, (0..list.len()).collect::<Vec<_>>());
         assert_eq!(targets.ranges().to_vec(), vec![0..t.len()]);
     }
 }
