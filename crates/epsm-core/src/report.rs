@@ -27,7 +27,8 @@ use crate::run::{OptResult, OptimizeError};
 pub struct Timings {
     /// Primal render at the scene resolution.
     pub primal: f64,
-    /// Gradient-pass render with path records.
+    /// The gradient pass's renders: the trace with path records and, when
+    /// the loss compares one, the matched render (each timed alone).
     pub trace: f64,
     /// Loss and matching.
     pub matching: f64,

@@ -356,3 +356,15 @@ fn every_feature_renders_the_same_image_wide_and_scalar() {
         assert_same_images("features, moved", &scene, &[4]);
     }
 }
+
+/// Many samples per pixel cut each tile into bands of rows, each traced
+/// alone (module `tracer::tiles`); an odd image size leaves partial tiles
+/// whose last bands hold no pixels: the same image from every kernel.
+#[test]
+fn tiles_cut_into_bands_render_the_same_image_wide_and_scalar() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/mirror.toml");
+    let mut parts = epsm_scene::load::load_parts(&path).expect("shipped scene loads");
+    (parts.camera.width, parts.camera.height) = (18, 21);
+    let scene = Scene::new(parts).expect("scene builds");
+    assert_same_images("mirror, 18x21", &scene, &[128]);
+}

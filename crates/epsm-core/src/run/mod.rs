@@ -296,10 +296,11 @@ impl Optimization {
     }
 
     /// Whether independent stages of an iteration run at the same time
-    /// (default on): the primal render beside the gradient pass, and the
-    /// loss's independent render beside the recorded trace. Either way the
-    /// results are the same bit for bit (every stream is seeded); off, the
-    /// stages run one after the other, as `epsm bench iteration` compares.
+    /// (default on): the recorded trace, the primal render and the judged
+    /// renders beside the matching, which runs mostly on one thread.
+    /// Either way the results are the
+    /// same bit for bit (every stream is seeded); off, the stages run one
+    /// after the other, as `epsm bench iteration` compares.
     pub fn set_overlap(&mut self, on: bool) {
         self.overlap = on;
     }
@@ -319,26 +320,22 @@ impl Optimization {
 
     /// Runs one iteration and returns its row.
     pub fn step(&mut self) -> OptResult<Row> {
-        let ((image, primal), gradient) = self.maybe_join(
-            || {
-                let t0 = Instant::now();
-                let image = render_image(
-                    &self.primal.scene,
-                    self.problem.passes.spp_primal,
-                    self.seed(1),
-                );
-                (image, t0.elapsed().as_secs_f64())
-            },
-            || self.gradient(),
-        );
-        let (g, _) = gradient?;
+        // The primal render and the judged renders (of the same θ) fill
+        // the cores while the gradient pass's matching runs.
+        let judges = self.judge.judges(self.iteration, false);
+        let (g, _, (image, primal, judged)) = self.gradient_beside(|| {
+            let t0 = Instant::now();
+            let image = render_image(
+                &self.primal.scene,
+                self.problem.passes.spp_primal,
+                self.seed(1),
+            );
+            let primal = t0.elapsed().as_secs_f64();
+            (image, primal, judges.then(|| self.judged()))
+        })?;
         if self.schedule.resets_at(self.iteration) {
             self.adam.reset();
         }
-        let judged = self
-            .judge
-            .judges(self.iteration, false)
-            .then(|| self.judged());
         if let Some(loss) = judged {
             Best::offer(&mut self.best, self.iteration, &self.theta, loss);
         }

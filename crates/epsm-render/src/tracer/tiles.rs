@@ -1,6 +1,7 @@
 //! The tile loop: tiles of [`TILE`]² pixels in parallel, each pixel's
 //! samples in order; one pixel sample from its camera ray through
-//! [`trace_path`] (the scalar tracer), or a tile by the wide tracer.
+//! [`trace_path`] (the scalar tracer), or a tile (or a band of its rows,
+//! `bands`) by the wide tracer.
 
 use std::time::Instant;
 
@@ -44,15 +45,25 @@ pub(super) fn render_tiles(
         .then(|| kernel.backend())
         .flatten()
         .map(|backend| wide::WideTracer::new(scene, backend));
+    #[cfg(target_arch = "x86_64")]
+    let bands = if wide.is_some() { bands(opts.spp) } else { 1 };
     #[cfg(not(target_arch = "x86_64"))]
-    let _ = kernel;
-    let mut tiles: Vec<TileOutput> = (0..tx * ty)
+    let (bands, _) = (1, kernel);
+    let mut tiles: Vec<TileOutput> = (0..tx * ty * bands)
         .into_par_iter()
-        .map(|t| {
+        .map(|unit| {
+            let t = unit / bands;
             let tile = UVec2::new(t % tx, t / tx);
             #[cfg(target_arch = "x86_64")]
             if let Some(wide) = &wide {
-                let out = wide.render_tile(scene, opts, tile);
+                let rows = TILE / bands;
+                let y0 = tile.y * TILE + unit % bands * rows;
+                let pixels: Vec<UVec2> = (y0..(y0 + rows).min(h))
+                    .flat_map(|y| {
+                        (tile.x * TILE..((tile.x + 1) * TILE).min(w)).map(move |x| UVec2::new(x, y))
+                    })
+                    .collect();
+                let out = wide.render_pixels(scene, opts, &pixels);
                 progress(out.pixels.len() as u64 * opts.spp as u64);
                 return out;
             }
@@ -88,6 +99,24 @@ pub(super) fn render_tiles(
         records,
         rays,
     )
+}
+
+/// Samples a band of a tile holds at least: a band smaller than this would
+/// spend a larger share of its steps with lanes waiting for the last paths.
+const BAND_SAMPLES: u64 = 16384;
+
+/// Bands of rows each tile is cut into for the wide tracer at `spp` samples
+/// per pixel: a power of two up to [`TILE`], each band holding at least
+/// [`BAND_SAMPLES`] samples. A render with few tiles of many samples (the
+/// 64² matched render at 256 samples per pixel: 16 tiles) gets enough
+/// pieces that no thread waits long for the last one. Each pixel's samples
+/// stay in one band and are summed in order, so the image does not depend
+/// on the cut.
+#[cfg(target_arch = "x86_64")]
+fn bands(spp: u32) -> u32 {
+    let tile = u64::from(TILE * TILE) * u64::from(spp);
+    let most = (tile / BAND_SAMPLES).clamp(1, u64::from(TILE));
+    1 << most.ilog2()
 }
 
 /// Renders one tile, with the AVX2 build of the tracer (and AVX box tests)

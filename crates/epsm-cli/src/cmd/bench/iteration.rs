@@ -8,9 +8,8 @@
 //!
 //! The problem runs `--iterations` iterations (from its start, with its
 //! automatic settings) twice: once with independent stages run one after
-//! the other, once overlapped (the primal render beside the gradient pass,
-//! the loss's independent render beside the recorded trace;
-//! `Optimization::set_overlap`). Both runs follow the same θ bit for bit.
+//! the other, once overlapped (the recorded trace, the primal render and
+//! the judged renders beside the matching; `Optimization::set_overlap`). Both runs follow the same θ bit for bit.
 //! Per iteration it reports the mean wall-clock seconds and the mean
 //! seconds of each stage (primal render, gradient-pass trace, loss and
 //! matching, solves): with overlap the stages add up to more than the wall

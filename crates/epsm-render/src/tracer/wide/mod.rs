@@ -6,14 +6,15 @@
 //! exactly the same distance aside, whose winner depends on the walk's
 //! visiting order).
 //!
-//! Model: a tile's pixel samples form a queue (pixels in row-major order,
-//! each pixel's samples in order). A lane takes the next sample from the
-//! queue whenever it is free, so lanes stay busy while paths of different
-//! lengths end at different bounces; each step advances every lane's path
-//! by one bounce (`bounce`). A finished sample's radiance waits in a ring
-//! until every earlier sample of the tile has finished, then is added to its
-//! pixel's sum, so each pixel sums its samples in order, as the scalar tile
-//! loop does, whatever the order paths finish in.
+//! Model: the pixel samples of a tile, or of a band of its rows when its
+//! pixels take many samples (module `tiles`), form a queue (pixels in
+//! row-major order, each pixel's samples in order). A lane takes the next
+//! sample from the queue whenever it is free, so lanes stay busy while
+//! paths of different lengths end at different bounces; each step advances
+//! every lane's path by one bounce (`bounce`). A finished sample's radiance
+//! waits in a ring until every earlier sample of the queue has finished,
+//! then is added to its pixel's sum, so each pixel sums its samples in
+//! order, as the scalar tile loop does, whatever the order paths finish in.
 //!
 //! | constant | value | meaning |
 //! |---|---|---|
@@ -25,7 +26,7 @@ mod queue;
 
 use glam::{UVec2, Vec3};
 
-use super::{DIM_FIRST_BOUNCE, DIMS_PER_BOUNCE, RenderOptions, TILE, TileOutput};
+use super::{DIM_FIRST_BOUNCE, DIMS_PER_BOUNCE, RenderOptions, TileOutput};
 use crate::bvh::Rays16;
 use crate::materials::wide::Materials16;
 use crate::sampler::STRATIFIED_DIMENSIONS;
@@ -98,32 +99,37 @@ impl WideTracer {
         }
     }
 
-    /// Renders tile `tile` (in units of [`TILE`] pixels) with `opts.spp ≥ 1`
-    /// samples per pixel.
-    pub fn render_tile(&self, scene: &Scene, opts: &RenderOptions, tile: UVec2) -> TileOutput {
+    /// Renders `pixels` (a tile's, or a band of a tile's, in row-major
+    /// order) with `opts.spp ≥ 1` samples per pixel.
+    pub fn render_pixels(
+        &self,
+        scene: &Scene,
+        opts: &RenderOptions,
+        pixels: &[UVec2],
+    ) -> TileOutput {
         debug_assert!(opts.spp >= 1);
         self.backend.call(Tile {
             scene,
             opts,
             tracer: self,
-            tile,
+            pixels,
         })
     }
 }
 
-/// One tile to render, for [`Backend::call`].
+/// The pixels of one tile (or band) to render, for [`Backend::call`].
 struct Tile<'a> {
     scene: &'a Scene,
     opts: &'a RenderOptions,
     tracer: &'a WideTracer,
-    tile: UVec2,
+    pixels: &'a [UVec2],
 }
 
 impl WithLanes for Tile<'_> {
     type Output = TileOutput;
     #[inline(always)]
     fn call<B: Lanes>(self, k: B) -> TileOutput {
-        render_tile_lanes(k, self.scene, self.opts, self.tracer, self.tile)
+        render_tile_lanes(k, self.scene, self.opts, self.tracer, self.pixels)
     }
 }
 
@@ -137,13 +143,10 @@ fn render_tile_lanes<B: Lanes>(
     scene: &Scene,
     opts: &RenderOptions,
     tracer: &WideTracer,
-    tile: UVec2,
+    pixels: &[UVec2],
 ) -> TileOutput {
-    let (w, h) = (scene.camera().width, scene.camera().height);
-    let pixels: Vec<UVec2> = (tile.y * TILE..((tile.y + 1) * TILE).min(h))
-        .flat_map(|y| (tile.x * TILE..((tile.x + 1) * TILE).min(w)).map(move |x| UVec2::new(x, y)))
-        .collect();
-    let mut queue = Queue::new(&pixels, w, opts.seed, opts.spp, scene.camera().film_rays());
+    let w = scene.camera().width;
+    let mut queue = Queue::new(pixels, w, opts.seed, opts.spp, scene.camera().film_rays());
     let setup = Setup {
         scene,
         opts,
