@@ -1,11 +1,61 @@
 //! Block-pair bounds on reduced costs (the first inequality of the parent
 //! module) and the supports they keep: the target clusters of each source
-//! cluster.
+//! cluster; the point-to-box distances of a list of clusters ([`Boxes`]).
 
 use rayon::prelude::*;
 
 use super::{Cluster, Clustered, PotentialFit};
-use crate::points::DIM;
+use crate::points::{DIM, Point};
+
+/// `gap²` with `gap` the distance of the coordinate `p` to the interval `[lo, hi]` (0 inside).
+#[inline(always)]
+fn gap_sq(lo: f64, hi: f64, p: f64) -> f64 {
+    let gap = (lo - p).max(p - hi).max(0.0);
+    gap * gap
+}
+
+/// The bounding boxes of a list of clusters, one `f64` column per axis and
+/// bound (structure of arrays), so the distances of a point to all of them
+/// are one loop the compiler vectorises.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Boxes {
+    lo: [Vec<f64>; DIM],
+    hi: [Vec<f64>; DIM],
+}
+
+impl Boxes {
+    /// The boxes of `clusters[list[k]]`, in the order of `list`.
+    pub fn gather(clusters: &[Cluster], list: &[u32]) -> Self {
+        let column = |f: &dyn Fn(&Cluster) -> f64| -> Vec<f64> {
+            list.iter().map(|&c| f(&clusters[c as usize])).collect()
+        };
+        Self {
+            lo: std::array::from_fn(|d| column(&|c| f64::from(c.lo[d]))),
+            hi: std::array::from_fn(|d| column(&|c| f64::from(c.hi[d]))),
+        }
+    }
+
+    /// Number of boxes.
+    pub fn len(&self) -> usize {
+        self.lo[0].len()
+    }
+
+    /// Writes to `out[k]` `Σ_d gap_d²`, with `gap_d` the distance of `p` to box `k`
+    /// along axis `d`: at most `‖p − q‖²` for every member `q` of the cluster
+    /// (in `f64`, rounded down by at most 3 units of the last place).
+    #[inline(always)]
+    pub fn dist_sq(&self, p: &Point, out: &mut [f64]) {
+        let len = self.len();
+        let out = &mut out[..len];
+        out.fill(0.0);
+        for d in 0..DIM {
+            let (lo, hi, q) = (&self.lo[d][..len], &self.hi[d][..len], f64::from(p[d]));
+            for k in 0..len {
+                out[k] += gap_sq(lo[k], hi[k], q);
+            }
+        }
+    }
+}
 
 /// Lower bound on `c_ij − f_i − g_j` over all `i ∈ I`, `j ∈ J` (see the module doc).
 pub(crate) fn pair_bound(ci: &Cluster, fi: &PotentialFit, cj: &Cluster, gj: &PotentialFit) -> f64 {

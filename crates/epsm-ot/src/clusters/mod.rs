@@ -46,7 +46,7 @@ use std::ops::Range;
 use rayon::prelude::*;
 
 use crate::points::{DIM, Point, PointCloud};
-pub(crate) use bounds::{Support, kept_targets, pair_bound};
+pub(crate) use bounds::{Boxes, Support, kept_targets, pair_bound};
 pub(crate) use cut::{Bound, PointCut, Selection};
 
 /// A contiguous run of points of a reordered cloud with its centroid and radius.
@@ -60,22 +60,6 @@ pub(crate) struct Cluster {
     pub lo: Point,
     /// Bounding box of the members: largest coordinates.
     pub hi: Point,
-}
-
-impl Cluster {
-    /// `Σ_d gap_d²` with `gap_d` the distance of `p` to the bounding box along
-    /// axis `d`: at most `‖p − q‖²` for every member `q` (in `f64`, rounded
-    /// down by at most 3 units of the last place).
-    pub fn box_dist_sq(&self, p: &Point) -> f64 {
-        (0..DIM)
-            .map(|d| {
-                let gap = (f64::from(self.lo[d]) - f64::from(p[d]))
-                    .max(f64::from(p[d]) - f64::from(self.hi[d]))
-                    .max(0.0);
-                gap * gap
-            })
-            .sum()
-    }
 }
 
 /// A cloud reordered by cluster.

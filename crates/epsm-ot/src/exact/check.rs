@@ -18,7 +18,7 @@
 
 use rayon::prelude::*;
 
-use crate::clusters::{Clustered, fit_potentials, kept_targets};
+use crate::clusters::{Boxes, Clustered, fit_potentials, kept_targets};
 use crate::cost::sq_dist_f64;
 use crate::cpu::{Simd, active_simd};
 
@@ -45,7 +45,8 @@ pub(crate) struct Check {
 /// Target blocks are skipped where the block-pair bound of `blocks` proves
 /// them above the margin for the row's whole cluster, and then per point where the
 /// distance to a block's bounding box less its largest `v_j` does
-/// ([`box_feasible`]). Each remaining pair is first screened in `f32` (see
+/// ([`box_feasible`], tested against all the cluster's blocks in one
+/// vectorised pass, [`far_boxes`]). Each remaining pair is first screened in `f32` (see
 /// [`screened_block`]); only pairs the screen cannot rule out are tested in
 /// `f64`, so no pair below the margin is missed.
 #[allow(clippy::too_many_arguments)]
@@ -98,10 +99,17 @@ pub(crate) fn violations(
                 return (found, violated, checked);
             }
             let list = kept_targets(ci, fi, y, &fit_v, 0.0);
+            let boxes = Boxes::gather(&y.clusters, &list);
+            let list_max_v: Vec<f64> = list.iter().map(|&jb| max_v[jb as usize]).collect();
+            let (mut box_sq, mut far) = (vec![0.0; list.len()], vec![false; list.len()]);
             let mut slack = [0.0f32; SCREEN_BLOCK];
+            let mut row: Vec<Found> = Vec::new();
             for i in ci.range.clone().filter(|&i| rows[i]) {
                 let p = x.cloud.point(i);
-                let mut row: Vec<Found> = Vec::new();
+                simd.run(
+                    #[inline(always)]
+                    |_| far_boxes(&boxes, &p, raised[i], &list_max_v, &mut box_sq, &mut far),
+                );
                 let mut dropped = false;
                 // Once pairs were dropped, only pairs up to the largest kept
                 // reduced cost (`bar`) can still be among the row's `per_row`
@@ -109,11 +117,8 @@ pub(crate) fn violations(
                 // below the exact `c − u − v − margin`). Skipping the others
                 // leaves the returned pairs and the floor as they were.
                 let (mut bar, mut screen_limit) = (f64::INFINITY, 0.0);
-                for &jb in &list {
+                for (&jb, _) in list.iter().zip(&far).filter(|(_, far)| !**far) {
                     let cj = &y.clusters[jb as usize];
-                    if box_feasible(cj.box_dist_sq(&p), raised[i], max_v[jb as usize]) {
-                        continue;
-                    }
                     let range = cj.range.clone();
                     checked += range.len() as u64;
                     for start in range.clone().step_by(SCREEN_BLOCK) {
@@ -149,7 +154,7 @@ pub(crate) fn violations(
                 };
                 floors[i - ci.range.start] = u[i] + rise;
                 violated += row.iter().filter(|e| e.3).count();
-                found.extend(row.into_iter().map(|(_, j, c, _)| (i as u32, j, c)));
+                found.extend(row.drain(..).map(|(_, j, c, _)| (i as u32, j, c)));
             }
             (found, violated, checked)
         })
@@ -161,14 +166,34 @@ pub(crate) fn violations(
     }
 }
 
+/// Marks in `far[k]` the boxes `k` of `boxes` whose bound proves every pair
+/// of point `p` (row potential `u`) with their cluster feasible
+/// ([`box_feasible`], `max_v[k]` the cluster's largest `v_j`); `box_sq` takes
+/// the distances. One branch-free pass over the boxes, so it vectorises.
+#[inline(always)]
+fn far_boxes(
+    boxes: &Boxes,
+    p: &crate::Point,
+    u: f64,
+    max_v: &[f64],
+    box_sq: &mut [f64],
+    far: &mut [bool],
+) {
+    boxes.dist_sq(p, box_sq);
+    for ((far, &b), &m) in far.iter_mut().zip(box_sq.iter()).zip(max_v) {
+        *far = box_feasible(b, u, m);
+    }
+}
+
 /// Whether the box bound proves `c_ij − u − v_j ≥ 0` for every member `j` of a
-/// target cluster, from `box_sq` (its [`crate::clusters::Cluster::box_dist_sq`]
+/// target cluster, from `box_sq` (its [`Boxes::dist_sq`]
 /// from point `i`) and `max_v`, the largest `v_j` of the cluster.
 ///
 /// `c_ij ≥ box_sq` in exact arithmetic; the computed `box_sq`, the computed
 /// `c_ij` and the subtractions each round by a few units of the last place
 /// relative to `box_sq + |u| + |max_v|`, so the bound is accepted only with a
 /// margin of 16 of them. Non-finite values are never accepted.
+#[inline(always)]
 fn box_feasible(box_sq: f64, u: f64, max_v: f64) -> bool {
     box_sq - u - max_v >= 16.0 * f64::EPSILON * (box_sq + u.abs() + max_v.abs())
 }
@@ -410,7 +435,10 @@ mod tests {
                 .map(|_| 0.3 * f64::from(rng.uniform()) - u + 1e-9 * f64::from(rng.uniform() - 0.5))
                 .collect();
             let max_v = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-            let box_sq = cj.box_dist_sq(&p);
+            let mut box_sq = [0.0];
+            Boxes::gather(&y.clusters, &[(case % y.clusters.len()) as u32])
+                .dist_sq(&p, &mut box_sq);
+            let box_sq = box_sq[0];
             for (k, j) in cj.range.clone().enumerate() {
                 let c = sq_dist_f64(&p, &y.cloud.point(j));
                 assert!(
