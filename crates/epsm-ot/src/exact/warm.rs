@@ -20,7 +20,7 @@
 
 use rayon::prelude::*;
 
-use super::finish::{Pass, check_rows};
+use super::finish::{Pass, VIOLATORS_PER_CANDIDATE, check_rows};
 use super::sparse::SparseAssignment;
 use super::{ExactSettings, SortedAssignment};
 use crate::clusters::Clustered;
@@ -141,6 +141,8 @@ impl ExactState {
             sorted_target[j as usize] = k as u32;
         }
         let v: Vec<f64> = y.order.iter().map(|&j| self.v[j as usize]).collect();
+        // Room for the pairs the check adds, so rows are allocated once.
+        let room = VIOLATORS_PER_CANDIDATE * settings.candidates;
         let edges: Vec<Vec<(u32, f64)>> = x
             .order
             .par_iter()
@@ -148,14 +150,12 @@ impl ExactState {
             .map(|(k, &i)| {
                 let i = i as usize;
                 let p = x.cloud.point(k);
-                let mut row: Vec<(u32, f64)> = self.targets[self.offsets[i]..self.offsets[i + 1]]
-                    .iter()
-                    .chain(std::iter::once(&self.perm[i]))
-                    .map(|&j| {
-                        let jk = sorted_target[j as usize];
-                        (jk, sq_dist_f64(&p, &y.cloud.point(jk as usize)))
-                    })
-                    .collect();
+                let kept = &self.targets[self.offsets[i]..self.offsets[i + 1]];
+                let mut row = Vec::with_capacity(kept.len() + 1 + room);
+                for &j in kept.iter().chain([&self.perm[i]]) {
+                    let jk = sorted_target[j as usize];
+                    row.push((jk, sq_dist_f64(&p, &y.cloud.point(jk as usize))));
+                }
                 row.sort_unstable_by_key(|e| e.0);
                 row.dedup_by_key(|e| e.0);
                 row
