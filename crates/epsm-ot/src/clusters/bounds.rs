@@ -50,8 +50,8 @@ impl Boxes {
         let len = self.len();
         let out = &mut out[..len];
         out.fill(0.0);
-        for d in 0..DIM {
-            let (lo, hi, q) = (&self.lo[d][..len], &self.hi[d][..len], f64::from(p[d]));
+        for ((lo, hi), &q) in self.lo.iter().zip(&self.hi).zip(p) {
+            let (lo, hi, q) = (&lo[..len], &hi[..len], f64::from(q));
             for k in 0..len {
                 out[k] += gap_sq(lo[k], hi[k], q);
             }
