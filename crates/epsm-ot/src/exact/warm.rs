@@ -67,11 +67,12 @@ impl ExactState {
             .edges
             .par_iter()
             .enumerate()
-            .map(|(k, row)| {
-                let mut scored: Vec<(f64, u32)> = row
-                    .iter()
-                    .map(|&(j, c)| (c - solved.u[k] - solved.v[j as usize], j))
-                    .collect();
+            .map_init(Vec::new, |scored: &mut Vec<(f64, u32)>, (k, row)| {
+                scored.clear();
+                scored.extend(
+                    row.iter()
+                        .map(|&(j, c)| (c - solved.u[k] - solved.v[j as usize], j)),
+                );
                 if scored.len() > per_row {
                     scored.select_nth_unstable_by(per_row, |a, b| {
                         a.0.total_cmp(&b.0).then(a.1.cmp(&b.1))
