@@ -1,12 +1,10 @@
 //! Block-pair bounds on reduced costs (the first inequality of the parent
 //! module) and the supports they keep: the target clusters of each source
-//! cluster; the same bounds and the point-to-box distances in columns that
-//! vectorise ([`TargetBounds`], [`Boxes`]).
+//! cluster; the point-to-box distances of a list of clusters ([`Boxes`]).
 
 use rayon::prelude::*;
 
 use super::{Cluster, Clustered, PotentialFit};
-use crate::cpu::active_simd;
 use crate::points::{DIM, Point};
 
 /// `gap²` with `gap` the distance of the coordinate `p` to the interval `[lo, hi]` (0 inside).
@@ -61,96 +59,18 @@ impl Boxes {
 
 /// Lower bound on `c_ij − f_i − g_j` over all `i ∈ I`, `j ∈ J` (see the module doc).
 pub(crate) fn pair_bound(ci: &Cluster, fi: &PotentialFit, cj: &Cluster, gj: &PotentialFit) -> f64 {
-    bound_to(
-        ci,
-        fi,
-        cj.centroid,
-        cj.radius,
-        gj.slope,
-        gj.mean,
-        gj.max_residual,
-    )
-}
-
-/// [`pair_bound`] from the target cluster's centroid and radius and its fit's slope, mean and largest residual.
-#[inline(always)]
-fn bound_to(
-    ci: &Cluster,
-    fi: &PotentialFit,
-    centroid: [f64; DIM],
-    radius: f64,
-    slope: [f64; DIM],
-    mean: f64,
-    max_residual: f64,
-) -> f64 {
-    let delta: [f64; DIM] = std::array::from_fn(|d| ci.centroid[d] - centroid[d]);
+    let delta: [f64; DIM] = std::array::from_fn(|d| ci.centroid[d] - cj.centroid[d]);
     let norm = |v: [f64; DIM]| v.iter().map(|t| t * t).sum::<f64>().sqrt();
     let dist_sq: f64 = delta.iter().map(|t| t * t).sum();
     let src_tilt = norm(std::array::from_fn(|d| 2.0 * delta[d] - fi.slope[d]));
-    let dst_tilt = norm(std::array::from_fn(|d| 2.0 * delta[d] + slope[d]));
+    let dst_tilt = norm(std::array::from_fn(|d| 2.0 * delta[d] + gj.slope[d]));
     dist_sq
         - fi.mean
-        - mean
+        - gj.mean
         - src_tilt * ci.radius
-        - dst_tilt * radius
+        - dst_tilt * cj.radius
         - fi.max_residual
-        - max_residual
-}
-
-/// What [`pair_bound`] needs of every target cluster and its fit, one column
-/// per quantity (structure of arrays), so the bounds of a source cluster
-/// against all target clusters are one loop the compiler vectorises.
-#[derive(Debug, Clone)]
-pub(crate) struct TargetBounds {
-    centroid: [Vec<f64>; DIM],
-    radius: Vec<f64>,
-    slope: [Vec<f64>; DIM],
-    mean: Vec<f64>,
-    max_residual: Vec<f64>,
-}
-
-impl TargetBounds {
-    /// The columns of the clusters of `dst` with their fits `g`.
-    pub fn new(dst: &Clustered, g: &[PotentialFit]) -> Self {
-        let clusters = &dst.clusters;
-        Self {
-            centroid: std::array::from_fn(|d| clusters.iter().map(|c| c.centroid[d]).collect()),
-            radius: clusters.iter().map(|c| c.radius).collect(),
-            slope: std::array::from_fn(|d| g.iter().map(|f| f.slope[d]).collect()),
-            mean: g.iter().map(|f| f.mean).collect(),
-            max_residual: g.iter().map(|f| f.max_residual).collect(),
-        }
-    }
-
-    /// Writes to `out[j]` [`pair_bound`] of source cluster `ci` (fit `fi`) and
-    /// target cluster `j`, bit for bit (the same operations in the same order).
-    fn bounds_into(&self, ci: &Cluster, fi: &PotentialFit, out: &mut [f64]) {
-        let len = self.radius.len();
-        let out = &mut out[..len];
-        let centroid: [&[f64]; DIM] = std::array::from_fn(|d| &self.centroid[d][..len]);
-        let slope: [&[f64]; DIM] = std::array::from_fn(|d| &self.slope[d][..len]);
-        let (radius, mean, max_residual) = (
-            &self.radius[..len],
-            &self.mean[..len],
-            &self.max_residual[..len],
-        );
-        active_simd().run(
-            #[inline(always)]
-            |_| {
-                for j in 0..len {
-                    out[j] = bound_to(
-                        ci,
-                        fi,
-                        std::array::from_fn(|d| centroid[d][j]),
-                        radius[j],
-                        std::array::from_fn(|d| slope[d][j]),
-                        mean[j],
-                        max_residual[j],
-                    );
-                }
-            },
-        );
-    }
+        - gj.max_residual
 }
 
 /// The target clusters whose reduced-cost bound against source cluster `ci` is at most `threshold`.
@@ -160,22 +80,25 @@ impl TargetBounds {
 pub(crate) fn kept_targets(
     ci: &Cluster,
     fi: &PotentialFit,
-    targets: &TargetBounds,
+    dst: &Clustered,
+    g: &[PotentialFit],
     threshold: f64,
 ) -> Vec<u32> {
-    let mut bounds = vec![0.0; targets.radius.len()];
-    targets.bounds_into(ci, fi, &mut bounds);
-    let kept: Vec<u32> = bounds
+    let bounds = dst
+        .clusters
         .iter()
+        .zip(g)
+        .map(|(cj, gj)| pair_bound(ci, fi, cj, gj));
+    let kept: Vec<u32> = bounds
+        .clone()
         .enumerate()
-        .filter(|(_, b)| **b <= threshold)
+        .filter(|(_, b)| *b <= threshold)
         .map(|(j, _)| j as u32)
         .collect();
     if kept.is_empty() {
         let best = bounds
-            .iter()
             .enumerate()
-            .min_by(|a, b| a.1.total_cmp(b.1))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
             .map_or(0, |(j, _)| j as u32);
         vec![best]
     } else {
@@ -191,11 +114,10 @@ fn kept_pairs(
     g: &[PotentialFit],
     threshold: f64,
 ) -> Vec<Vec<u32>> {
-    let targets = TargetBounds::new(dst, g);
     src.clusters
         .par_iter()
         .zip(f)
-        .map(|(ci, fi)| kept_targets(ci, fi, &targets, threshold))
+        .map(|(ci, fi)| kept_targets(ci, fi, dst, g, threshold))
         .collect()
 }
 

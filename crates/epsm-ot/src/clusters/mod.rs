@@ -46,7 +46,7 @@ use std::ops::Range;
 use rayon::prelude::*;
 
 use crate::points::{DIM, Point, PointCloud};
-pub(crate) use bounds::{Boxes, Support, TargetBounds, kept_targets, pair_bound};
+pub(crate) use bounds::{Boxes, Support, kept_targets, pair_bound};
 pub(crate) use cut::{Bound, PointCut, Selection};
 
 /// A contiguous run of points of a reordered cloud with its centroid and radius.

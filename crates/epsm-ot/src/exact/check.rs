@@ -18,7 +18,7 @@
 
 use rayon::prelude::*;
 
-use crate::clusters::{Boxes, Clustered, TargetBounds, fit_potentials, kept_targets};
+use crate::clusters::{Boxes, Clustered, fit_potentials, kept_targets};
 use crate::cost::sq_dist_f64;
 use crate::cpu::{Simd, active_simd};
 
@@ -67,7 +67,6 @@ pub(crate) fn violations(
     let (u32s, v32s) = (to_f32(&raised), to_f32(v));
     // Potentials beyond the f32 range: no screen, every pair is tested in f64.
     let screen = u32s.iter().chain(&v32s).all(|t| t.is_finite());
-    let targets = TargetBounds::new(y, &fit_v);
     let simd = active_simd();
     let cols = y.cloud.columns();
     let max_v: Vec<f64> = y
@@ -99,7 +98,7 @@ pub(crate) fn violations(
             if !rows[ci.range.clone()].iter().any(|&r| r) {
                 return (found, violated, checked);
             }
-            let list = kept_targets(ci, fi, &targets, 0.0);
+            let list = kept_targets(ci, fi, y, &fit_v, 0.0);
             let boxes = Boxes::gather(&y.clusters, &list);
             let list_max_v: Vec<f64> = list.iter().map(|&jb| max_v[jb as usize]).collect();
             let (mut box_sq, mut far) = (vec![0.0; list.len()], vec![false; list.len()]);
