@@ -30,7 +30,9 @@
 //!    augmenting paths the rest, making the matching exactly
 //!    complementary-slack with the potentials (`sparse`). Whenever
 //!    more than 1/16 of the rows are unmatched (after step 4 added violated
-//!    pairs), the auction first re-prices all rows from the current potentials.
+//!    pairs), the auction first re-prices all rows from the current potentials,
+//!    starting at the smaller ε `exact.reprice_auction_start`: those prices
+//!    are feasible on the graph before the check.
 //! 4. **Optimality check**: a streaming pass over all pairs of the rows whose
 //!    potential rose above their **floor** (a lower bound on `c_ij − v_j` over
 //!    the pairs outside the graph, left by the row's last check and kept
@@ -54,6 +56,7 @@
 //! | `exact.tolerance`      | reduced cost counted as a violation below −tolerance | 1e-11 |
 //! | `exact.auction_start`  | first ε of the auction, × diameter²        | 0.025   |
 //! | `exact.auction_end`    | last ε of the auction, × diameter²         | 2.5e-10 |
+//! | `exact.reprice_auction_start` | first ε of a cold solve's re-pricing auctions, × diameter² | 1e-3 |
 //! | `exact.warm_auction_start` | first ε of a warm-started solve's auctions, × diameter² | 1e-4 |
 //! | `exact.warm_check_margin` | margin of a warm-started solve's checks, × diameter² | 5e-4 |
 //! | `exact.warm_start`     | Sinkhorn settings of the warm start        | blur 0.03, one update per scale, ≤ 10 polish updates |
@@ -304,7 +307,7 @@ pub(crate) fn solve_sorted(
 ) -> SortedAssignment {
     let Prices { edges, v, stats } = sparse_prices(x, y, diameter_sq, settings);
     let pass = Pass {
-        auction_start: settings.auction_start,
+        auction_start: settings.reprice_auction_start,
         check_margin: 0.0,
     };
     finish(

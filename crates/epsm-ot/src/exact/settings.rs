@@ -40,6 +40,12 @@ pub struct ExactSettings {
     pub auction_start: f64,
     /// Last ε of the auction, before the exact finish, in units of the clouds' squared diameter.
     pub auction_end: f64,
+    /// First ε of the auctions that re-price all rows after an optimality
+    /// check of a cold solve added violated pairs (see `finish`), in units of
+    /// the clouds' squared diameter. Their prices are feasible on the graph
+    /// before the check, so a start far below `auction_start` suffices; a
+    /// price war still raises ε up to `auction_start` (see `auction`).
+    pub reprice_auction_start: f64,
     /// First ε of the auctions of a warm-started solve (`crate::warm`), whose
     /// prices start near the optimum, in units of the clouds' squared diameter.
     pub warm_auction_start: f64,
@@ -71,6 +77,7 @@ impl Default for ExactSettings {
             // benchmark's blobs pairs: 4.4).
             auction_start: 0.025,
             auction_end: 2.5e-10,
+            reprice_auction_start: 1e-3,
             warm_auction_start: 1e-4,
             warm_check_margin: 5e-4,
         }
@@ -110,6 +117,15 @@ impl ExactSettings {
                 key: "exact.auction_start",
                 value: self.auction_start,
                 reason: "need auction_start >= auction_end > 0",
+            });
+        }
+        if !(self.reprice_auction_start >= self.auction_end
+            && self.reprice_auction_start.is_finite())
+        {
+            return Err(OtError::InvalidSetting {
+                key: "exact.reprice_auction_start",
+                value: self.reprice_auction_start,
+                reason: "need reprice_auction_start >= auction_end > 0",
             });
         }
         if !(self.warm_auction_start >= self.auction_end && self.warm_auction_start.is_finite()) {

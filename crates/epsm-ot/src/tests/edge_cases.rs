@@ -97,6 +97,20 @@ fn bad_input_is_a_typed_error() {
             })
         ));
     }
+    // Below the last ε of the auction, or not a number.
+    for reprice_auction_start in [f64::NAN, 1e-12] {
+        let bad = Matcher::Exact(ExactSettings {
+            reprice_auction_start,
+            ..ExactSettings::default()
+        });
+        assert!(matches!(
+            bad.solve(&a, &a),
+            Err(OtError::InvalidSetting {
+                key: "exact.reprice_auction_start",
+                ..
+            })
+        ));
+    }
 }
 
 #[test]
