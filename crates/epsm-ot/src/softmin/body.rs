@@ -1,7 +1,10 @@
 //! The per-block body of a soft-min row: scores into a stack buffer, then
 //! maximum, exponentials and sum in fixed-order lanes. Plain loops only: the
 //! body is inlined into each SIMD-compiled copy of the row (see the parent
-//! module).
+//! module). The target columns are cut to one length once per row
+//! ([`Columns`]), so each streamed range is checked against that one length
+//! instead of once per column (a row streams many ranges of about a hundred
+//! targets).
 
 use std::ops::Range;
 
@@ -250,8 +253,8 @@ pub(super) fn push_range_moments(
         acc.sum += f64::from(lane_sum(&weights[..padded]));
         let mut mom = [0.0f32; DIM + 1];
         for k in 0..len {
-            for d in 0..DIM {
-                mom[d] += weights[k] * cols.y[d][start + k];
+            for (m, column) in mom.iter_mut().zip(&cols.y) {
+                *m += weights[k] * column[start + k];
             }
             mom[DIM] += weights[k] * costs[k];
         }
