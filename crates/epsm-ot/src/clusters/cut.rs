@@ -185,11 +185,12 @@ impl PointCut {
     /// are reused): a pass gathers every block's bound once ([`Self::gather`] over all
     /// blocks) and each source block copies the ones it lists.
     pub fn subset_into(&self, list: &[u32], out: &mut Self) {
-        /// `v` cleared and refilled with `len` zeros, as a slice.
+        /// `v` cleared and refilled with `len` zeros, as a slice of length `len` (cut to
+        /// `len` explicitly, so the copy below knows every column's length and checks no index).
         fn sized(v: &mut Vec<f32>, len: usize) -> &mut [f32] {
             v.clear();
             v.resize(len, 0.0);
-            v
+            &mut v[..len]
         }
         let n = list.len();
         out.bound = self.bound;

@@ -1,7 +1,10 @@
 //! The per-block body of a soft-min row: scores into a stack buffer, then
 //! maximum, exponentials and sum in fixed-order lanes. Plain loops only: the
 //! body is inlined into each SIMD-compiled copy of the row (see the parent
-//! module).
+//! module). The target columns are cut to one length once per row
+//! ([`Columns`]), so each streamed range is checked against that one length
+//! instead of once per column (a row streams many ranges of about a hundred
+//! targets).
 
 use std::ops::Range;
 
@@ -9,29 +12,49 @@ use super::exp::exp_nonpositive;
 use super::{BLOCK, BlockSums, LANES, RowSum};
 use crate::points::{DIM, Point};
 
+/// The target columns a row streams: five coordinates, log-weights and potentials, all
+/// of one length.
+pub(super) struct Columns<'a> {
+    pub(super) y: [&'a [f32]; DIM],
+    pub(super) lw: &'a [f32],
+    pub(super) g: &'a [f32],
+}
+
+impl<'a> Columns<'a> {
+    /// Views of `y`, `lw` and `g` cut to the length of `lw` (a longer column is cut; a
+    /// shorter one panics, an internal error): with one length, the bounds checks of a
+    /// range's seven slices fold into one.
+    #[inline(always)]
+    pub(super) fn new(y: &'a [Vec<f32>; DIM], lw: &'a [f32], g: &'a [f32]) -> Self {
+        let n = lw.len();
+        Self {
+            y: [&y[0][..n], &y[1][..n], &y[2][..n], &y[3][..n], &y[4][..n]],
+            lw,
+            g: &g[..n],
+        }
+    }
+}
+
 /// Scores `lw_j + (g_j − c(x, y_j))·inv_eps` of the targets `range` into `out` (as long as
 /// `range`) and, if `COSTS`, the costs `c(x, y_j)` into `costs` (as long as `range`; unused
 /// otherwise).
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
 fn score_into<const COSTS: bool>(
     x: &Point,
-    y: &[Vec<f32>; DIM],
-    lw: &[f32],
-    g: &[f32],
+    cols: &Columns,
     inv_eps: f32,
     range: Range<usize>,
     out: &mut [f32],
     costs: &mut [f32],
 ) {
     let (c0, c1, c2, c3, c4) = (
-        &y[0][range.clone()],
-        &y[1][range.clone()],
-        &y[2][range.clone()],
-        &y[3][range.clone()],
-        &y[4][range.clone()],
+        &cols.y[0][range.clone()],
+        &cols.y[1][range.clone()],
+        &cols.y[2][range.clone()],
+        &cols.y[3][range.clone()],
+        &cols.y[4][range.clone()],
     );
-    let (lws, gs) = (&lw[range.clone()], &g[range]);
+    let (lws, gs) = (&cols.lw[range.clone()], &cols.g[range]);
     for k in 0..out.len() {
         let d0 = x[0] - c0[k];
         let d1 = x[1] - c1[k];
@@ -58,24 +81,20 @@ fn score_into<const COSTS: bool>(
 #[inline(always)]
 fn score_chunks<const W: usize>(
     x: &Point,
-    y: &[Vec<f32>; DIM],
-    lw: &[f32],
-    g: &[f32],
+    cols: &Columns,
     inv_eps: f32,
     range: Range<usize>,
     out: &mut [f32],
 ) {
     let len = range.len();
-    let whole = if range.start + len.next_multiple_of(W) <= lw.len() {
+    let whole = if range.start + len.next_multiple_of(W) <= cols.lw.len() {
         len.next_multiple_of(W)
     } else {
         len - len % W
     };
     score_into::<false>(
         x,
-        y,
-        lw,
-        g,
+        cols,
         inv_eps,
         range.start..range.start + whole,
         &mut out[..whole],
@@ -84,9 +103,7 @@ fn score_chunks<const W: usize>(
     if whole < len {
         score_into::<false>(
             x,
-            y,
-            lw,
-            g,
+            cols,
             inv_eps,
             range.start + whole..range.end,
             &mut out[whole..len],
@@ -102,9 +119,7 @@ fn score_chunks<const W: usize>(
 #[inline(always)]
 pub(super) fn gathered_sum<const W: usize>(
     x: &Point,
-    y: &[Vec<f32>; DIM],
-    lw: &[f32],
-    g: &[f32],
+    cols: &Columns,
     inv_eps: f32,
     ranges: &[Range<usize>],
     acc: &mut RowSum,
@@ -117,15 +132,7 @@ pub(super) fn gathered_sum<const W: usize>(
         let mut start = range.start;
         while start < range.end {
             let len = (range.end - start).min(BLOCK - fill);
-            score_chunks::<W>(
-                x,
-                y,
-                lw,
-                g,
-                inv_eps,
-                start..start + len,
-                &mut scores[fill..],
-            );
+            score_chunks::<W>(x, cols, inv_eps, start..start + len, &mut scores[fill..]);
             fill += len;
             start += len;
             if fill == BLOCK {
@@ -162,16 +169,14 @@ fn reduce_scores(scores: &mut [f32], acc: &mut RowSum) {
 #[inline(always)]
 pub(super) fn block_sums<const W: usize>(
     x: &Point,
-    y: &[Vec<f32>; DIM],
-    lw: &[f32],
-    g: &[f32],
+    cols: &Columns,
     inv_eps: f32,
     ranges: &[Range<usize>],
     sums: &mut BlockSums,
 ) -> u64 {
     let mut len = 0;
     for range in ranges {
-        score_chunks::<W>(x, y, lw, g, inv_eps, range.clone(), &mut sums.scores[len..]);
+        score_chunks::<W>(x, cols, inv_eps, range.clone(), &mut sums.scores[len..]);
         len += range.len();
     }
     let padded = len.div_ceil(LANES) * LANES;
@@ -209,12 +214,9 @@ pub(super) struct Scratch {
 /// Streams one range of targets into `acc` with its moments, in blocks of [`BLOCK`];
 /// returns its length.
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
 pub(super) fn push_range_moments(
     x: &Point,
-    y: &[Vec<f32>; DIM],
-    lw: &[f32],
-    g: &[f32],
+    cols: &Columns,
     inv_eps: f32,
     range: Range<usize>,
     acc: &mut RowSum,
@@ -231,9 +233,7 @@ pub(super) fn push_range_moments(
         let padded = len.div_ceil(LANES) * LANES;
         score_into::<true>(
             x,
-            y,
-            lw,
-            g,
+            cols,
             inv_eps,
             start..start + len,
             &mut scores[..len],
@@ -253,8 +253,8 @@ pub(super) fn push_range_moments(
         acc.sum += f64::from(lane_sum(&weights[..padded]));
         let mut mom = [0.0f32; DIM + 1];
         for k in 0..len {
-            for d in 0..DIM {
-                mom[d] += weights[k] * y[d][start + k];
+            for (m, column) in mom.iter_mut().zip(&cols.y) {
+                *m += weights[k] * column[start + k];
             }
             mom[DIM] += weights[k] * costs[k];
         }

@@ -22,7 +22,7 @@ use std::ops::Range;
 
 use crate::cpu::{Simd, active_simd};
 use crate::points::{DIM, Point};
-use body::{Scratch, block_sums, gathered_sum, push_range_moments};
+use body::{Columns, Scratch, block_sums, gathered_sum, push_range_moments};
 pub(crate) use exp::exp_nonpositive;
 
 /// Targets processed per block of a row.
@@ -200,17 +200,18 @@ fn stream_portable<const MOMENTS: bool, const W: usize>(
     // The point is copied: read through the reference captured by `Simd::run`'s
     // closure, it would be loaded and broadcast again for every range.
     let x = &{ *x };
+    let cols = &Columns::new(y, lw, g);
     let mut pairs = 0;
     match sink {
         Sink::Row(acc) if !MOMENTS => {
-            pairs = gathered_sum::<W>(x, y, lw, g, inv_eps, ranges, acc);
+            pairs = gathered_sum::<W>(x, cols, inv_eps, ranges, acc);
         }
         Sink::Row(acc) => {
             for r in ranges {
-                pairs += push_range_moments(x, y, lw, g, inv_eps, r.clone(), acc, &mut scratch);
+                pairs += push_range_moments(x, cols, inv_eps, r.clone(), acc, &mut scratch);
             }
         }
-        Sink::Blocks(sums) => pairs = block_sums::<W>(x, y, lw, g, inv_eps, ranges, sums),
+        Sink::Blocks(sums) => pairs = block_sums::<W>(x, cols, inv_eps, ranges, sums),
     }
     pairs
 }
