@@ -74,10 +74,10 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use crate::clusters::{Clustered, Support};
-use crate::cost::sq_dist_f64;
+use crate::cost::{sq_dist_f64, sq_dists_f64};
 use crate::error::OtError;
 use crate::plan::{OtResult, PhaseTimes, SolveStats};
-use crate::points::{DIM, Point, PointCloud, check_pair};
+use crate::points::{PointCloud, check_pair};
 use crate::sinkhorn::{SinkhornSettings, check_range, solve_dual};
 use finish::{Pass, auction_potentials, finish};
 use settings::checked_diameter_sq;
@@ -348,7 +348,7 @@ fn best_partners(
                     for start in range.clone().step_by(DIST_BLOCK) {
                         let block = start..(start + DIST_BLOCK).min(range.end);
                         let costs = &mut costs[..block.len()];
-                        sq_dists(&p, y.cloud.columns(), block.start, costs);
+                        sq_dists_f64(&p, y.cloud.columns(), block.start, costs);
                         for (j, &c) in block.zip(costs.iter()) {
                             let score = c - pot[j];
                             if score <= bar {
@@ -376,23 +376,5 @@ fn best_partners(
         .collect()
 }
 
-/// Targets whose costs [`best_partners`] computes per call of [`sq_dists`].
+/// Targets whose costs [`best_partners`] computes per call of [`sq_dists_f64`].
 const DIST_BLOCK: usize = 64;
-
-/// `out[t] = ‖p − y_{start + t}‖²` in `f64` for the target columns `cols`:
-/// the same sum, in the same order, as [`sq_dist_f64`], a column at a time so
-/// the loops vectorise.
-fn sq_dists(p: &Point, cols: &[Vec<f32>; DIM], start: usize, out: &mut [f64]) {
-    let end = start + out.len();
-    for (d, col) in cols.iter().enumerate() {
-        let pd = f64::from(p[d]);
-        for (o, &t) in out.iter_mut().zip(&col[start..end]) {
-            let diff = pd - f64::from(t);
-            *o = if d == 0 {
-                diff * diff
-            } else {
-                *o + diff * diff
-            };
-        }
-    }
-}
